@@ -1,0 +1,48 @@
+"""The exceptions pinrate raises on purpose.
+
+Every error derives from :class:`PinrateError`, so ``except pinrate.PinrateError`` catches
+anything pinrate refuses to do. Messages name the offending thing (file, frame, joint,
+robot name) and, where there is a list of valid choices, list them.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+
+class PinrateError(Exception):
+    """Root of every error pinrate raises on purpose."""
+
+
+class InputError(PinrateError, ValueError):
+    """Wrong shapes or lengths, NaN/inf in inputs, unknown axis letters, bad partitions."""
+
+
+class LoadError(PinrateError):
+    """A robot could not be loaded: missing file, malformed XML, not a URDF, unknown name."""
+
+
+class FrameError(PinrateError, KeyError):
+    """A frame name (tip or sensor) that the model does not have."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class SingularBlockError(PinrateError):
+    """A Jacobian block that must be inverted is singular at the given configuration."""
+
+    def __init__(self, message: str, *, block: str = "", q: object = None) -> None:
+        super().__init__(message)
+        self.block = block
+        self.q = q
+
+
+def choices_hint(name: str, valid: Iterable[str], *, limit: int = 40) -> str:
+    """A ' Did you mean …? Known: …' suffix listing the closest or all valid names."""
+    valid = list(valid)
+    close = difflib.get_close_matches(name, valid, n=5, cutoff=0.5)
+    hint = f" Did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+    shown = valid if len(valid) <= limit else [*valid[:limit], f"... ({len(valid) - limit} more)"]
+    return f"{hint} Known: {', '.join(shown)}."
