@@ -81,18 +81,21 @@ def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
 
 def schur(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
           v: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The exact inverse by blocks (eq. 20), from the two Schur complements:
+    """The exact inverse by blocks (eq. 20), through the Schur complement of W:
 
         K = (A - B W^-1 U)^-1,  N = (W - U A^-1 B)^-1,  L = -A^-1 B N,  M = -W^-1 U K
-        qdot_arm = K (v - B W^-1 Ω),   qdot_wrist = N (Ω - U A^-1 v)
+        qdot_arm   = K v + L Ω = K (v - B W^-1 Ω)
+        qdot_wrist = M v + N Ω = W^-1 (Ω - U qdot_arm)
 
-    Error: none when A, W and both complements are invertible (the OCR'd eq. 20 prints
-    "U = -A^-1 B N" for L).
+    The last form follows from Woodbury's identity N = W^-1 + W^-1 U K B W^-1 and needs
+    neither A^-1 nor N: one complement and W^-1. With a wide arm (A is m x n, n > m) K is
+    the pseudo-inverse of the m x n complement and the result still solves J q̇ = s exactly
+    (a particular solution, not the minimum-norm one). Error: none when W and K exist.
+    (The OCR'd eq. 20 prints "U = -A^-1 B N" for L.)
     """
-    A_inv, W_inv = inverse(A, "A"), inverse(W, "W")
-    K = inverse(A - B @ W_inv @ U, "A - B W^-1 U")
-    N = inverse(W - U @ A_inv @ B, "W - U A^-1 B")
-    return K @ (v - B @ (W_inv @ omega)), N @ (omega - U @ (A_inv @ v))
+    W_inv = inverse(W, "W")
+    arm = inverse(A - B @ W_inv @ U, "A - B W^-1 U") @ (v - B @ (W_inv @ omega))
+    return arm, W_inv @ (omega - U @ arm)
 
 
 def mca1(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
