@@ -112,7 +112,7 @@ def test_exact_is_minimum_norm_for_a_redundant_arm(panda) -> None:
 def well_conditioned_states(robot, count, threshold=0.05):
     seed = 0
     while count:
-        q, partition, twist = random_state(robot, None, seed)
+        q, _partition, twist = random_state(robot, None, seed)
         seed += 1
         if np.linalg.svd(robot.jacobian(q), compute_uv=False).min() >= threshold:
             count -= 1
@@ -131,7 +131,7 @@ def test_dls_approaches_exact_away_from_singularities(ur5, q, twist) -> None:
 
 
 def test_partition_joints_only(panda) -> None:
-    q, partition, twist = random_state(panda, None, 1)
+    q, _partition, twist = random_state(panda, None, 1)
     for algorithm in pinrate.ALGORITHMS:
         rates = pinrate.joint_rates(panda, q, twist, algorithm=algorithm)
         assert rates.shape == (9,)
@@ -143,11 +143,12 @@ def test_mca2_is_exact_when_wrist_axes_meet_at_the_tcp() -> None:
     robot = pinrate.robots.barker_arm()
     for seed in range(5):
         q, partition, twist = random_state(robot, None, seed)
-        A, B, U, W = partition.blocks(robot, robot.jacobian(q))
+        _A, B, _U, _W = partition.blocks(robot, robot.jacobian(q))
         np.testing.assert_allclose(B, 0.0, atol=1e-12)
         exact = pinrate.joint_rates(robot, q, twist, algorithm="exact")
-        np.testing.assert_allclose(pinrate.joint_rates(robot, q, twist, algorithm="mca2"), exact,
-                                   rtol=1e-8, atol=1e-8)
+        np.testing.assert_allclose(
+            pinrate.joint_rates(robot, q, twist, algorithm="mca2"), exact, rtol=1e-8, atol=1e-8
+        )
 
 
 def test_mca1_is_exact_on_a_cartesian_arm() -> None:
@@ -155,12 +156,13 @@ def test_mca1_is_exact_on_a_cartesian_arm() -> None:
     robot = pinrate.robots.cartesian()
     for seed in range(5):
         q, partition, twist = random_state(robot, None, seed)
-        A, B, U, W = partition.blocks(robot, robot.jacobian(q))
+        _A, _B, U, _W = partition.blocks(robot, robot.jacobian(q))
         np.testing.assert_allclose(U, 0.0, atol=1e-12)
         exact = pinrate.joint_rates(robot, q, twist, algorithm="exact")
         for algorithm in ("mca1", "mca2", "mca3"):
-            np.testing.assert_allclose(pinrate.joint_rates(robot, q, twist, algorithm=algorithm), exact,
-                                       rtol=1e-9, atol=1e-9)
+            np.testing.assert_allclose(
+                pinrate.joint_rates(robot, q, twist, algorithm=algorithm), exact, rtol=1e-9, atol=1e-9
+            )
 
 
 # ---------------------------------------------------------------------- singular blocks
@@ -231,5 +233,5 @@ def test_q_with_inf(ur5) -> None:
 
 
 def test_unknown_algorithm(ur5) -> None:
-    with pytest.raises(pinrate.InputError, match="mca4.*mca1"):
+    with pytest.raises(pinrate.InputError, match=r"mca4.*mca1"):
         pinrate.joint_rates(ur5, ur5.home(), np.zeros(6), algorithm="mca4")

@@ -36,7 +36,7 @@ def test_fewer_joints_than_components() -> None:
     robot = pinrate.load("so100")
     partition = Partition.auto(robot)
     assert len(partition.arm) == 3 and len(partition.wrist) == 2
-    A, B, U, W = partition.blocks(robot, robot.jacobian(robot.home()))
+    _A, B, _U, W = partition.blocks(robot, robot.jacobian(robot.home()))
     assert W.shape == (3, 2) and B.shape == (3, 2)
 
 
@@ -45,7 +45,7 @@ def test_blocks_are_the_rows_and_columns_named(mixed: pinrate.Robot) -> None:
     q = mixed.random_configuration(2)
     jacobian = mixed.jacobian(q)
     A, B, U, W = partition.blocks(mixed, jacobian)
-    yaw, slide, roll, pitch = (mixed.velocity_indices(j)[0] for j in ("yaw", "slide", "roll", "pitch"))
+    yaw, slide, _roll, pitch = (mixed.velocity_indices(j)[0] for j in ("yaw", "slide", "roll", "pitch"))
     expected_A = [[jacobian[2, slide], jacobian[2, yaw]], [jacobian[0, slide], jacobian[0, yaw]]]
     np.testing.assert_array_equal(A, expected_A)
     np.testing.assert_array_equal(B, [[jacobian[2, pitch]], [jacobian[0, pitch]]])
@@ -65,7 +65,7 @@ def test_str_explains_the_split(ur5: pinrate.Robot) -> None:
 
 
 def test_overlapping_joints() -> None:
-    with pytest.raises(pinrate.InputError, match="overlap.*elbow"):
+    with pytest.raises(pinrate.InputError, match=r"overlap.*elbow"):
         Partition(["shoulder", "elbow"], ["elbow", "wrist"])
 
 

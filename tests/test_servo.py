@@ -39,10 +39,12 @@ def test_errors_are_measured_at_each_q(ur5: pinrate.Robot) -> None:
     for i in (0, 10, 30):
         pose = ur5.pose(trajectory.q[i])
         assert trajectory.position_error[i] == pytest.approx(np.linalg.norm(pose[:3, 3] - target[:3, 3]))
-        assert trajectory.orientation_error[i] == pytest.approx(rotation_angle(pose[:3, :3], target[:3, :3]),
-                                                                abs=1e-9)
+        assert trajectory.orientation_error[i] == pytest.approx(
+            rotation_angle(pose[:3, :3], target[:3, :3]), abs=1e-9
+        )
         assert trajectory.spectral_radius[i] == pytest.approx(
-            pinrate.convergence(ur5, trajectory.q[i]).spectral_radius)
+            pinrate.convergence(ur5, trajectory.q[i]).spectral_radius
+        )
     assert not trajectory.converged and trajectory.reason.startswith("max_steps")
 
 
@@ -77,8 +79,17 @@ def test_polar_outside_eq_58_diverges_with_a_dead_beat_sensor() -> None:
     q0 = np.array([0.0, 0.12, 2.9])
     assert pinrate.convergence(robot, q0).spectral_radius > 1
     target = polar_pose(robot, 0.0, 0.12, 2.95)
-    trajectory = pinrate.servo(robot, q0, target, algorithm="mca1", dt=0.01, gain=100.0,
-                               max_linear_speed=math.inf, max_angular_speed=math.inf, max_steps=200)
+    trajectory = pinrate.servo(
+        robot,
+        q0,
+        target,
+        algorithm="mca1",
+        dt=0.01,
+        gain=100.0,
+        max_linear_speed=math.inf,
+        max_angular_speed=math.inf,
+        max_steps=200,
+    )
     assert not trajectory.converged
     assert trajectory.reason.startswith("diverging")
     assert trajectory.status[-1] == "diverging"
@@ -107,8 +118,16 @@ def test_singular_block_stops_the_run() -> None:
 
 def test_speed_saturation(ur5: pinrate.Robot) -> None:
     _, target = demo_target(ur5, Partition.auto(ur5), seed=3)
-    trajectory = pinrate.servo(ur5, ur5.home(), target, algorithm="exact", max_steps=5,
-                               gain=50.0, max_linear_speed=0.1, max_angular_speed=10.0)
+    trajectory = pinrate.servo(
+        ur5,
+        ur5.home(),
+        target,
+        algorithm="exact",
+        max_steps=5,
+        gain=50.0,
+        max_linear_speed=0.1,
+        max_angular_speed=10.0,
+    )
     assert trajectory.status[0] == "saturated"
     # Exact rates realise the commanded twist: the TCP moves at most 0.1 m/s * dt per step.
     steps = np.linalg.norm(np.diff([ur5.pose(q)[:3, 3] for q in trajectory.q], axis=0), axis=1)
@@ -117,15 +136,21 @@ def test_speed_saturation(ur5: pinrate.Robot) -> None:
 
 @pytest.mark.parametrize(
     ("target", "match"),
-    [(np.eye(3), "4x4"), (np.full((4, 4), np.nan), "NaN"), (np.diag([1.0, 1.0, 2.0, 1.0]), "rotation"),
-     ("home", "4x4")],
+    [
+        (np.eye(3), "4x4"),
+        (np.full((4, 4), np.nan), "NaN"),
+        (np.diag([1.0, 1.0, 2.0, 1.0]), "rotation"),
+        ("home", "4x4"),
+    ],
 )
 def test_bad_targets(ur5: pinrate.Robot, target: object, match: str) -> None:
     with pytest.raises(pinrate.InputError, match=match):
         pinrate.servo(ur5, ur5.home(), target)
 
 
-@pytest.mark.parametrize(("keyword", "value"), [("dt", 0.0), ("gain", -1.0), ("tol", math.nan), ("max_steps", -1)])
+@pytest.mark.parametrize(
+    ("keyword", "value"), [("dt", 0.0), ("gain", -1.0), ("tol", math.nan), ("max_steps", -1)]
+)
 def test_bad_settings(ur5: pinrate.Robot, keyword: str, value: float) -> None:
     with pytest.raises(pinrate.InputError, match=keyword):
         pinrate.servo(ur5, ur5.home(), ur5.pose(ur5.home()), **{keyword: value})

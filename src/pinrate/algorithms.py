@@ -79,8 +79,9 @@ def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
     return np.linalg.pinv(J, rcond=PINV_RCOND) @ twist if J.size else np.zeros(cols)
 
 
-def schur(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
-          v: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def schur(
+    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray, v: np.ndarray, omega: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """The exact inverse by blocks (eq. 20), through the Schur complement of W:
 
         K = (A - B W^-1 U)^-1,  N = (W - U A^-1 B)^-1,  L = -A^-1 B N,  M = -W^-1 U K
@@ -98,8 +99,9 @@ def schur(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
     return arm, W_inv @ (omega - U @ arm)
 
 
-def mca1(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
-         v: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def mca1(
+    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray, v: np.ndarray, omega: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """First motion control algorithm (eq. 23-25): J^-1 with U taken as 0.
 
         qdot_arm = A^-1 v - A^-1 B W^-1 Ω        (eq. 24)
@@ -114,8 +116,9 @@ def mca1(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
     return A_inv @ (v - B @ wrist), wrist
 
 
-def mca2(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
-         v: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def mca2(
+    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray, v: np.ndarray, omega: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Second motion control algorithm (eq. 22, 44-45): J^-1 with B taken as 0.
 
         qdot_arm = A^-1 v                          (eq. 44)
@@ -130,8 +133,9 @@ def mca2(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
     return arm, W_inv @ (omega - U @ arm)
 
 
-def mca3(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray,
-         v: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def mca3(
+    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray, v: np.ndarray, omega: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Third (general) motion control algorithm (eq. 21, 51-52): K ≈ A^-1, N ≈ W^-1.
 
         qdot_arm = A^-1 v - A^-1 B W^-1 Ω           (eq. 51)
@@ -194,8 +198,9 @@ def partition_rates(J: np.ndarray, index: PartitionIndex, twist: np.ndarray, alg
     return rates
 
 
-def joint_rates(robot: Robot, q: object, twist: object, *, algorithm: str = "mca1",
-                partition: Partition | None = None) -> np.ndarray:
+def joint_rates(
+    robot: Robot, q: object, twist: object, *, algorithm: str = "mca1", partition: Partition | None = None
+) -> np.ndarray:
     """Joint rates (nv,) that realise a sensor-frame twist command at configuration q.
 
     Args:
@@ -219,10 +224,15 @@ def joint_rates(robot: Robot, q: object, twist: object, *, algorithm: str = "mca
     q = robot.check_q(q)
     partition = Partition.auto(robot) if partition is None else partition
     index = partition.resolve(robot)
-    twist = check_vector(twist, index.rows.size, f"twist (partition {partition.linear!r}+{partition.angular!r})")
+    twist = check_vector(
+        twist, index.rows.size, f"twist (partition {partition.linear!r}+{partition.angular!r})"
+    )
     jacobian = robot.kinematics(q)[0]
     try:
         return partition_rates(jacobian, index, twist, algorithm)
     except SingularBlockError as error:
-        raise SingularBlockError(f"{error} for robot {robot.name!r} with {algorithm} at q = "
-                                 f"{np.array2string(q, precision=4)}", block=error.block, q=q) from None
+        raise SingularBlockError(
+            f"{error} for robot {robot.name!r} with {algorithm} at q = {np.array2string(q, precision=4)}",
+            block=error.block,
+            q=q,
+        ) from None

@@ -51,7 +51,7 @@ def demo_target(robot: Robot, partition: Partition, seed: int | None) -> tuple[n
 def summary(robot: Robot, trajectory: Trajectory) -> str:
     """A short, readable account of a servo run."""
     finite = trajectory.spectral_radius[np.isfinite(trajectory.spectral_radius)]
-    radius = (f"{finite.min():.3f} .. {finite.max():.3f}" if finite.size else "undefined")
+    radius = f"{finite.min():.3f} .. {finite.max():.3f}" if finite.size else "undefined"
     if finite.size < trajectory.spectral_radius.size:
         radius += " (singular at some steps)"
     lines = [
@@ -75,17 +75,30 @@ def _demo(args: argparse.Namespace) -> int:
         target = pin.SE3(pin.rpy.rpyToMatrix(roll, pitch, yaw), np.array([x, y, z])).homogeneous
     else:
         _, target = demo_target(robot, partition, args.seed)
-    trajectory = servo(robot, robot.home(), target, algorithm=args.algorithm, partition=partition,
-                       dt=args.dt, gain=args.gain, max_steps=args.max_steps, tol=args.tol)
+    trajectory = servo(
+        robot,
+        robot.home(),
+        target,
+        algorithm=args.algorithm,
+        partition=partition,
+        dt=args.dt,
+        gain=args.gain,
+        max_steps=args.max_steps,
+        tol=args.tol,
+    )
     position, rpy = target[:3, 3], pin.rpy.matrixToRpy(target[:3, :3])
-    print(f"target     xyz {np.array2string(position, precision=4)} m   "
-          f"rpy {np.array2string(rpy, precision=4)} rad (world)")
+    print(
+        f"target     xyz {np.array2string(position, precision=4)} m   "
+        f"rpy {np.array2string(rpy, precision=4)} rad (world)"
+    )
     print(summary(robot, trajectory))
     return 0 if trajectory.converged else 1
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="pinrate", description="Resolved-rate motion control for URDF arms.")
+    parser = argparse.ArgumentParser(
+        prog="pinrate", description="Resolved-rate motion control for URDF arms."
+    )
     parser.add_argument("-v", "--verbose", action="store_true", help="log what pinrate chooses")
     commands = parser.add_subparsers(dest="command", required=True)
 
@@ -97,23 +110,30 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--tip", help="TCP frame (default: the name table's, or the chain's end)")
     demo.add_argument("--sensor", help="frame the twist is expressed in (default: the tip)")
     demo.add_argument("--algorithm", default="mca1", choices=ALGORITHMS)
-    demo.add_argument("--target", nargs=6, type=float, metavar=("X", "Y", "Z", "R", "P", "Y"),
-                      help="target tip pose in the world: metres and roll-pitch-yaw radians")
+    demo.add_argument(
+        "--target",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "R", "P", "Y"),
+        help="target tip pose in the world: metres and roll-pitch-yaw radians",
+    )
     demo.add_argument("--seed", type=int, default=0, help="seed of the default random target")
     demo.add_argument("--dt", type=float, default=0.01, help="control period in seconds")
     demo.add_argument("--gain", type=float, default=1.0, help="twist per unit pose error (1/s)")
     demo.add_argument("--max-steps", type=int, default=2000)
     demo.add_argument("--tol", type=float, default=1e-4, help="convergence tolerance (m and rad)")
-    demo.add_argument("--no-viewer", action="store_true",
-                      help="headless run (the only mode until the Meshcat view lands)")
+    demo.add_argument(
+        "--no-viewer", action="store_true", help="headless run (the only mode until the Meshcat view lands)"
+    )
     demo.set_defaults(run=_demo)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="pinrate: %(message)s")
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING, format="pinrate: %(message)s"
+    )
     try:
         return int(args.run(args))
     except PinrateError as error:

@@ -20,7 +20,7 @@ import numpy as np
 from .algorithms import SINGULAR_RATIO, inverse
 from .errors import InputError, SingularBlockError
 from .partition import Partition
-from .robot import Robot, RngLike
+from .robot import RngLike, Robot
 
 _Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 
@@ -36,7 +36,9 @@ class Convergence:
     converges: bool
 
 
-def convergence_matrices(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def convergence_matrices(
+    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(G, H) = (U A^-1 B W^-1, B W^-1 U A^-1) (eq. 32, 50); pseudo-inverses for non-square blocks."""
     P = U @ inverse(A, "A")
     Q = B @ inverse(W, "W")
@@ -63,9 +65,12 @@ def convergence(robot: Robot, q: object, *, partition: Partition | None = None) 
     try:
         return convergence_from_blocks(*partition.blocks(robot, robot.kinematics(q)[0]))
     except SingularBlockError as error:
-        raise SingularBlockError(f"{error} for robot {robot.name!r} at q = "
-                                 f"{np.array2string(q, precision=4)}: G and H are undefined",
-                                 block=error.block, q=q) from None
+        raise SingularBlockError(
+            f"{error} for robot {robot.name!r} at q = "
+            f"{np.array2string(q, precision=4)}: G and H are undefined",
+            block=error.block,
+            q=q,
+        ) from None
 
 
 def _batched_inverse(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -90,10 +95,7 @@ def spectral_radii(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -
     P = U @ A_inv
     Q = B @ W_inv
     smaller = P @ Q if P.shape[1] <= Q.shape[1] else Q @ P
-    if smaller.shape[1] == 0:
-        radii = np.zeros(A.shape[0])
-    else:
-        radii = np.abs(np.linalg.eigvals(smaller)).max(axis=1)
+    radii = np.zeros(A.shape[0]) if smaller.shape[1] == 0 else np.abs(np.linalg.eigvals(smaller)).max(axis=1)
     radii[singular_A | singular_W] = np.inf
     return radii
 
@@ -138,8 +140,9 @@ def partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Par
     return out
 
 
-def sample_convergence(robot: Robot, samples: int, *, partition: Partition | None = None,
-                       rng: RngLike = None) -> ConvergenceSample:
+def sample_convergence(
+    robot: Robot, samples: int, *, partition: Partition | None = None, rng: RngLike = None
+) -> ConvergenceSample:
     """The Theorem's test at ``samples`` configurations drawn uniformly in the joint limits.
 
     Only the partition's joints are drawn (others stay at neutral; joints without limits in
@@ -153,6 +156,7 @@ def sample_convergence(robot: Robot, samples: int, *, partition: Partition | Non
     configurations = robot.sample_configurations(int(samples), rng, joints=partition.joints)
     jacobians = partition_jacobians(robot, configurations, partition)
     m, n_arm = index.m, index.arm_columns.size
-    radii = spectral_radii(jacobians[:, :m, :n_arm], jacobians[:, :m, n_arm:],
-                           jacobians[:, m:, :n_arm], jacobians[:, m:, n_arm:])
+    radii = spectral_radii(
+        jacobians[:, :m, :n_arm], jacobians[:, :m, n_arm:], jacobians[:, m:, :n_arm], jacobians[:, m:, n_arm:]
+    )
     return ConvergenceSample(q=configurations, spectral_radius=radii, partition=partition)

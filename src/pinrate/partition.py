@@ -110,8 +110,9 @@ class Partition:
         U = J[angular, arm], W = J[angular, wrist]."""
         jacobian = np.asarray(J, dtype=float)
         if jacobian.shape != (6, robot.nv):
-            raise InputError(f"J must have shape (6, {robot.nv}) for robot {robot.name!r}, "
-                             f"got {jacobian.shape}")
+            raise InputError(
+                f"J must have shape (6, {robot.nv}) for robot {robot.name!r}, got {jacobian.shape}"
+            )
         index = self.resolve(robot)
         return split_blocks(jacobian[np.ix_(index.rows, index.columns)], index.m, len(index.arm_columns))
 
@@ -120,7 +121,8 @@ class Partition:
             return ", ".join(names) if names else "none"
 
         lines = [
-            f"arm ({len(self.arm)} joints, drive linear {self.linear or 'none'} through A): {joints(self.arm)}",
+            f"arm ({len(self.arm)} joints, drive linear {self.linear or 'none'} through A): "
+            f"{joints(self.arm)}",
             f"wrist ({len(self.wrist)} joints, drive angular {self.angular or 'none'} through W): "
             f"{joints(self.wrist)}",
             f"A is {self.m}x{len(self.arm)}, W is {self.k}x{len(self.wrist)}; "
@@ -140,15 +142,15 @@ class Partition:
         cached = robot.__dict__.get("_auto_partition")
         if cached is not None:
             return cached
-        samples = np.vstack([robot.neutral(), robot.home(),
-                             robot.sample_configurations(_AUTO_SAMPLES, rng=20260101)])
+        samples = np.vstack(
+            [robot.neutral(), robot.home(), robot.sample_configurations(_AUTO_SAMPLES, rng=20260101)]
+        )
         magnitude = np.zeros((6, robot.nv))
         for q in samples:
             magnitude = np.maximum(magnitude, np.abs(robot.jacobian(q)))
         tol = _ZERO_TOL * (1.0 + magnitude.max())
         moving = magnitude > tol
-        joints = [j for j in robot.tip_chain()
-                  if any(moving[:, c].any() for c in robot.velocity_indices(j))]
+        joints = [j for j in robot.tip_chain() if any(moving[:, c].any() for c in robot.velocity_indices(j))]
         columns = [c for j in joints for c in robot.velocity_indices(j)]
         active_rows = moving[:, columns].any(axis=1) if columns else np.zeros(6, dtype=bool)
         linear = "".join(a for i, a in enumerate(_AXES) if active_rows[i])
@@ -160,7 +162,9 @@ class Partition:
         return partition
 
 
-def split_blocks(jacobian: np.ndarray, m: int, n_arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def split_blocks(
+    jacobian: np.ndarray, m: int, n_arm: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(A, B, U, W) of a Jacobian already restricted to the partition's rows and columns."""
     return (jacobian[:m, :n_arm], jacobian[:m, n_arm:], jacobian[m:, :n_arm], jacobian[m:, n_arm:])
 
@@ -188,4 +192,3 @@ def _axes(value: object, what: str) -> str:
     if repeated:
         raise InputError(f"{what} axes {value!r}: letter(s) {repeated} appear more than once")
     return value
-

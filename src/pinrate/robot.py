@@ -85,8 +85,11 @@ class Robot:
 
         if tip is None:
             self.tip_id = default_tip_frame(model)
-            logger.info("%s: no tip given, chose frame %r (end of the longest chain)",
-                        self.name, model.frames[self.tip_id].name)
+            logger.info(
+                "%s: no tip given, chose frame %r (end of the longest chain)",
+                self.name,
+                model.frames[self.tip_id].name,
+            )
         else:
             self.tip_id = resolve_frame(model, tip, role="tip", robot=self.name)
         self.tip = model.frames[self.tip_id].name
@@ -117,8 +120,9 @@ class Robot:
         """Pinocchio joint index of a moving joint, or an InputError listing the joints."""
         joint_id = self._joint_ids.get(joint)
         if joint_id is None or self.model.joints[joint_id].nv == 0:
-            raise InputError(f"robot {self.name!r} has no moving joint {joint!r}."
-                             + choices_hint(joint, self.joint_names))
+            raise InputError(
+                f"robot {self.name!r} has no moving joint {joint!r}." + choices_hint(joint, self.joint_names)
+            )
         return joint_id
 
     def velocity_indices(self, joint: str) -> list[int]:
@@ -134,8 +138,7 @@ class Robot:
         )
 
     def __repr__(self) -> str:
-        return (f"Robot({self.name!r}, nq={self.nq}, nv={self.nv}, tip={self.tip!r}, "
-                f"sensor={self.sensor!r})")
+        return f"Robot({self.name!r}, nq={self.nq}, nv={self.nv}, tip={self.tip!r}, sensor={self.sensor!r})"
 
     # ------------------------------------------------------------------ configurations
     def neutral(self) -> np.ndarray:
@@ -251,15 +254,16 @@ class Robot:
         try:
             if self._urdf_text is not None:
                 return pin.buildGeomFromUrdfString(
-                    self.model, self._urdf_text, pin.GeometryType.VISUAL,
-                    package_dirs=self._package_dirs)
+                    self.model, self._urdf_text, pin.GeometryType.VISUAL, package_dirs=self._package_dirs
+                )
             if self._urdf_path is not None:
                 return pin.buildGeomFromUrdf(
-                    self.model, str(self._urdf_path), pin.GeometryType.VISUAL,
-                    package_dirs=self._package_dirs)
+                    self.model, str(self._urdf_path), pin.GeometryType.VISUAL, package_dirs=self._package_dirs
+                )
         except (RuntimeError, ValueError, OSError) as error:
-            warnings.warn(f"{self.name}: visual meshes not loaded ({error}); kinematics unaffected",
-                          stacklevel=2)
+            warnings.warn(
+                f"{self.name}: visual meshes not loaded ({error}); kinematics unaffected", stacklevel=2
+            )
         return pin.GeometryModel()
 
 
@@ -287,8 +291,10 @@ def resolve_frame(model: pin.Model, name: str, *, role: str, robot: str = "") ->
         if model.existFrame(name, frame_type):
             return int(model.getFrameId(name, frame_type))
     frames = list(dict.fromkeys(frame.name for frame in model.frames))
-    raise FrameError(f"robot {robot or model.name!r} has no frame {name!r} (asked as {role})."
-                     + choices_hint(name, frames, limit=200))
+    raise FrameError(
+        f"robot {robot or model.name!r} has no frame {name!r} (asked as {role})."
+        + choices_hint(name, frames, limit=200)
+    )
 
 
 def default_tip_frame(model: pin.Model) -> int:
@@ -298,6 +304,7 @@ def default_tip_frame(model: pin.Model) -> int:
     among the frames attached to it, the one with the most ancestor frames wins, links
     preferred over joint frames.
     """
+
     def moving_depth(joint_id: int) -> int:
         return sum(1 for j in model.supports[joint_id] if j > 0 and model.joints[j].nv > 0)
 
@@ -367,8 +374,9 @@ def robot_from_urdf(
             pin.loadReferenceConfigurations(model, str(srdf_path), False)
             references = {entry.key(): np.array(entry.data()) for entry in model.referenceConfigurations}
         except (RuntimeError, ValueError) as error:
-            warnings.warn(f"{label}: reference configurations not read from {srdf_path}: {error}",
-                          stacklevel=3)
+            warnings.warn(
+                f"{label}: reference configurations not read from {srdf_path}: {error}", stacklevel=3
+            )
     if home is not None and home in references:
         references["home"] = references[home].copy()
     if home_values:
@@ -380,9 +388,16 @@ def robot_from_urdf(
     if "home" in references:
         references["home"] = _into_limits(model, references["home"])
     robot_name = name or ET.fromstring(text).get("name") or label
-    return Robot(model, tip=tip, sensor=sensor, name=robot_name, urdf_path=urdf_path,
-                 urdf_text=text if urdf_path is None else None, package_dirs=package_dirs,
-                 reference_configurations=references)
+    return Robot(
+        model,
+        tip=tip,
+        sensor=sensor,
+        name=robot_name,
+        urdf_path=urdf_path,
+        urdf_text=text if urdf_path is None else None,
+        package_dirs=package_dirs,
+        reference_configurations=references,
+    )
 
 
 def _into_limits(model: pin.Model, q: np.ndarray) -> np.ndarray:
@@ -426,8 +441,14 @@ def load(source: str | os.PathLike[str], *, tip: str | None = None, sensor: str 
     if isinstance(source, os.PathLike) or (isinstance(source, str) and _looks_like_path(source)):
         path = Path(source).expanduser().resolve()
         text = _read_urdf(path)
-        return robot_from_urdf(text, label=str(path), tip=tip, sensor=sensor, urdf_path=path,
-                               package_dirs=_package_dirs_for(path))
+        return robot_from_urdf(
+            text,
+            label=str(path),
+            tip=tip,
+            sensor=sensor,
+            urdf_path=path,
+            package_dirs=_package_dirs_for(path),
+        )
     if not isinstance(source, str):
         raise InputError(f"source must be a URDF path or a robot name, not {type(source).__name__}")
     if source in robots.ROBOT_NAMES:
@@ -458,7 +479,14 @@ def _load_example_robot(entry: CatalogEntry, *, tip: str | None, sensor: str | N
     srdf = example_robot_path(entry.srdf) if entry.srdf else None
     share = example_robot_data_share()
     return robot_from_urdf(
-        _read_urdf(path), label=entry.name, tip=tip or entry.tip, sensor=sensor, urdf_path=path,
-        package_dirs=[str(share)] if share else [], srdf_path=srdf, home=entry.home,
-        home_values=entry.home_values, name=entry.name,
+        _read_urdf(path),
+        label=entry.name,
+        tip=tip or entry.tip,
+        sensor=sensor,
+        urdf_path=path,
+        package_dirs=[str(share)] if share else [],
+        srdf_path=srdf,
+        home=entry.home,
+        home_values=entry.home_values,
+        name=entry.name,
     )

@@ -117,7 +117,7 @@ def _saturate(values: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
 
 
 def _positive(value: float, name: str) -> float:
-    if not (isinstance(value, int | float) and math.isfinite(value) or value == math.inf) or value <= 0:
+    if not ((isinstance(value, int | float) and math.isfinite(value)) or value == math.inf) or value <= 0:
         raise InputError(f"{name} must be a positive number, got {value!r}")
     return float(value)
 
@@ -183,8 +183,10 @@ def servo(
         best = min(best, total)
         if total > DIVERGENCE_FACTOR * best + tol:
             final = "diverging"
-            reason = (f"diverging: error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best "
-                      f"{best:.4g} at step {step}")
+            reason = (
+                f"diverging: error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best "
+                f"{best:.4g} at step {step}"
+            )
             break
         if step == max_steps:
             final, reason = "max steps", f"max_steps ({max_steps}) reached"
@@ -229,8 +231,12 @@ def _limited_coordinates(robot: Robot, partition: Partition) -> list[tuple[str, 
     for joint in partition.joints:
         joint_model = robot.model.joints[robot.joint_id(joint)]
         start = joint_model.idx_q
-        if joint_model.nq == 1 and math.isfinite(lower[start]) and math.isfinite(upper[start]) \
-                and upper[start] - lower[start] < 1e6:
+        if (
+            joint_model.nq == 1
+            and math.isfinite(lower[start])
+            and math.isfinite(upper[start])
+            and upper[start] - lower[start] < 1e6
+        ):
             limited.append((joint, start, float(lower[start]), float(upper[start])))
     return limited
 
