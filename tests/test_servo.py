@@ -159,3 +159,20 @@ def test_bad_settings(ur5: pinrate.Robot, keyword: str, value: float) -> None:
 def test_bad_q0(ur5: pinrate.Robot) -> None:
     with pytest.raises(pinrate.InputError, match="q"):
         pinrate.servo(ur5, np.zeros(3), np.eye(4))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_pose_error_is_the_definition_in_sensor_axes(seed: int) -> None:
+    from pinrate.servo import pose_error
+
+    rng = np.random.default_rng(seed)
+    tip, sensor, target = (pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3)) for _ in range(3))
+    error = pose_error(tip, sensor, target)
+    R_s = sensor.rotation
+    np.testing.assert_allclose(error[:3], R_s.T @ (target.translation - tip.translation), atol=1e-12)
+    np.testing.assert_allclose(error[3:], R_s.T @ pin.log3(target.rotation @ tip.rotation.T), atol=1e-9)
+    # Sensor at the tip: the same definition with R_s = R_tip.
+    at_tip = pose_error(tip, tip, target)
+    np.testing.assert_allclose(at_tip[:3], tip.rotation.T @ (target.translation - tip.translation), atol=1e-12)
+    np.testing.assert_allclose(at_tip[3:], tip.rotation.T @ pin.log3(target.rotation @ tip.rotation.T),
+                               atol=1e-9)

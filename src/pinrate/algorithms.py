@@ -29,6 +29,9 @@ from .robot import Robot, check_vector
 SINGULAR_RATIO = 1e-10
 """A square block M is singular when |det M| <= SINGULAR_RATIO * prod of its column norms."""
 
+EXACT_RCOND = 1e-10
+"""``exact`` falls back to the pseudo-inverse when J's condition number exceeds 1 / EXACT_RCOND."""
+
 PINV_RCOND = 1e-10
 """Relative cut-off of singular values in every pseudo-inverse."""
 
@@ -69,13 +72,22 @@ def inverse(M: np.ndarray, block: str) -> np.ndarray:
 def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
     """The exact resolved-rate solution qdot = J^-1 s (eq. 4, 18).
 
-    Square and non-singular: a linear solve, no error. Otherwise the minimum-norm
-    least-squares solution J^+ s, whose twist error (I - J J^+) s is the part of the command
-    the joints cannot produce.
+    Square: one LAPACK solve, no error. Since ||J||_F ||qdot|| <= cond(J) ||s||, a solution
+    with ||J||_F ||qdot|| > ||s|| / EXACT_RCOND betrays a (numerically) singular J; it and
+    every non-square J get the minimum-norm least-squares solution J^+ s instead, whose
+    twist error (I - J J^+) s is the part of the command the joints cannot produce.
     """
     rows, cols = J.shape
-    if rows == cols and rows > 0 and hadamard_ratio(J) > SINGULAR_RATIO:
-        return np.linalg.solve(J, twist)
+    if rows == cols and rows > 0:
+        try:
+            rates = np.linalg.solve(J, twist)
+        except np.linalg.LinAlgError:
+            rates = None
+        if rates is not None:
+            flat = J.ravel()
+            growth = float(flat @ flat) * float(rates @ rates) * EXACT_RCOND**2
+            if growth <= float(twist @ twist):  # also False for NaN/inf rates
+                return rates
     return np.linalg.pinv(J, rcond=PINV_RCOND) @ twist if J.size else np.zeros(cols)
 
 
@@ -172,20 +184,27 @@ def check_algorithm(algorithm: object) -> str:
     return str(algorithm)
 
 
-def partition_rates(J: np.ndarray, index: PartitionIndex, twist: np.ndarray, algorithm: str) -> np.ndarray:
+def partition_rates(J: np.ndarray, index: PartitionIndex, twist: np.ndarray, algorithm: str,
+                    parts: _small.Blocks | None = None) -> np.ndarray:
     """Joint rates (nv,) from a sensor-frame Jacobian (6, nv) and a twist in partition order.
 
-    Joints outside the partition get rate 0. Raises SingularBlockError (without q: the
+    Joints outside the partition get rate 0. ``parts`` may hold the blocks as nested lists
+    already taken from J (when ``index.small``). Raises SingularBlockError (without q: the
     caller adds it) when an MCA meets a singular square block.
     """
+    if index.small and algorithm in _small.KERNELS:
+        if parts is None:
+            parts = _small.blocks(J, index.row_lists, index.column_takers)
+        solved = _small.block_rates(algorithm, parts, twist)
+        if index.all_columns:
+            return np.array(solved)
+        rates = np.zeros(J.shape[1])
+        rates[index.columns] = solved
+        return rates
     rates = np.zeros(J.shape[1])
     if index.columns.size == 0:
         return rates
-    fast = _small.solve(algorithm, J, index, twist)
-    if fast is not None:
-        rates[index.columns] = fast
-        return rates
-    reduced = J[np.ix_(index.rows, index.columns)]
+    reduced = J if index.all_rows and index.all_columns else J[np.ix_(index.rows, index.columns)]
     if algorithm == "exact":
         rates[index.columns] = exact(reduced, twist)
     elif algorithm == "dls":
@@ -227,7 +246,7 @@ def joint_rates(
     twist = check_vector(
         twist, index.rows.size, f"twist (partition {partition.linear!r}+{partition.angular!r})"
     )
-    jacobian = robot.kinematics(q)[0]
+    jacobian = robot.sensor_jacobian(q)
     try:
         return partition_rates(jacobian, index, twist, algorithm)
     except SingularBlockError as error:

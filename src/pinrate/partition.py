@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import _small
 from .errors import InputError
 from .robot import Robot
 
@@ -32,10 +33,24 @@ class PartitionIndex:
     wrist_columns: np.ndarray
     m: int  # number of linear rows
     k: int  # number of angular rows
+    nv: int  # the robot's velocity dimension
     columns: np.ndarray = field(init=False)
+    all_columns: bool = field(init=False)  # the columns are 0 .. nv-1 in order
+    all_rows: bool = field(init=False)  # the rows are 0 .. 5 in order
+    small: bool = field(init=False)  # square blocks of size <= 3: closed-form kernels apply
+    row_lists: tuple[list[int], list[int]] = field(init=False)
+    column_takers: tuple[_small.Take, _small.Take] = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "columns", np.concatenate([self.arm_columns, self.wrist_columns]))
+        columns = np.concatenate([self.arm_columns, self.wrist_columns])
+        set_ = object.__setattr__
+        set_(self, "columns", columns)
+        set_(self, "row_lists", (self.rows[: self.m].tolist(), self.rows[self.m :].tolist()))
+        set_(self, "column_takers", (_small.taker(self.arm_columns.tolist()),
+                                     _small.taker(self.wrist_columns.tolist())))
+        set_(self, "small", _small.eligible(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
+        set_(self, "all_columns", columns.tolist() == list(range(self.nv)))
+        set_(self, "all_rows", self.rows.tolist() == list(range(6)))
 
 
 @dataclass(frozen=True, init=False)
@@ -101,6 +116,7 @@ class Partition:
                 wrist_columns=np.array(wrist_columns, dtype=np.intp),
                 m=self.m,
                 k=self.k,
+                nv=robot.nv,
             )
             cache[self] = index
         return index

@@ -14,6 +14,7 @@ integration on the configuration space (continuous joints have nq = 2, nv = 1).
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import os
@@ -187,8 +188,9 @@ class Robot:
 
     def check_q(self, q: object) -> np.ndarray:
         """q as a float array of shape (nq,); InputError on a wrong length or NaN/inf."""
-        return check_vector(q, self.nq, "q", names=self._q_names())
+        return check_vector(q, self.nq, "q", names=self._q_names)
 
+    @functools.cached_property
     def _q_names(self) -> list[str]:
         names = [""] * self.nq
         for joint_id in range(1, self.model.njoints):
@@ -221,7 +223,16 @@ class Robot:
         Rows [vx vy vz wx wy wz]: the velocity of the tip frame's origin and the angular
         velocity, both expressed in the sensor frame's axes.
         """
-        return self.kinematics(self.check_q(q))[0]
+        return self.sensor_jacobian(self.check_q(q))
+
+    def sensor_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`jacobian` at an already checked q: the hot path of a control loop.
+
+        With the sensor at the tip this is one Pinocchio call (the LOCAL frame Jacobian).
+        """
+        if self.sensor_id == self.tip_id:
+            return pin.computeFrameJacobian(self.model, self.data, q, self.tip_id, pin.LOCAL)
+        return self.kinematics(q)[0]
 
     def kinematics(self, q: np.ndarray) -> tuple[np.ndarray, pin.SE3, pin.SE3]:
         """(J_sensor, world_T_tip, world_T_sensor) at a checked q, in one kinematics pass.
@@ -276,7 +287,9 @@ def check_vector(value: object, length: int, what: str, *, names: Sequence[str] 
         raise InputError(f"{what} must be a vector of {length} numbers: {error}") from None
     if array.shape != (length,):
         raise InputError(f"{what} must have shape ({length},), got shape {array.shape}")
-    if not np.isfinite(array).all():
+    # A finite sum proves every entry finite (the cheap test on the hot path); an overflowing
+    # sum of finite entries falls through to the entry-wise test.
+    if not math.isfinite(array.sum()) and not np.isfinite(array).all():
         bad = np.flatnonzero(~np.isfinite(array))
         where = ", ".join(f"{what}[{i}]" + (f" ({names[i]})" if names and names[i] else "") for i in bad)
         raise InputError(f"{what} contains NaN or inf at {where}")

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from . import _small
 from .algorithms import check_algorithm, partition_rates
 from .convergence import convergence_from_blocks
 from .errors import InputError, SingularBlockError
@@ -102,15 +103,24 @@ def as_pose(target: object) -> pin.SE3:
 
 
 def pose_error(world_T_tip: pin.SE3, world_T_sensor: pin.SE3, target: pin.SE3) -> np.ndarray:
-    """[position error; rotation error] (6,) from the tip to the target, in sensor axes."""
-    sensor_R_world = world_T_sensor.rotation.T
-    position = sensor_R_world @ (target.translation - world_T_tip.translation)
-    rotation = sensor_R_world @ pin.log3(target.rotation @ world_T_tip.rotation.T)
-    return np.concatenate([position, rotation])
+    """[position error; rotation error] (6,) from the tip to the target, in sensor axes.
+
+    With S the sensor pose: position R_s^T (p_target - p_tip) = (S^-1 T_target).p -
+    (S^-1 T_tip).p and rotation R_s^T log3(R_target R_tip^T) = log3(R_a R_b^T) with
+    R_a = R_s^T R_target and R_b = R_s^T R_tip (log3 commutes with conjugation).
+    """
+    sensor_T_target = world_T_sensor.actInv(target)
+    if world_T_sensor is world_T_tip:
+        return np.concatenate([sensor_T_target.translation, pin.log3(sensor_T_target.rotation)])
+    sensor_T_tip = world_T_sensor.actInv(world_T_tip)
+    return np.concatenate([
+        sensor_T_target.translation - sensor_T_tip.translation,
+        pin.log3(sensor_T_target.rotation @ sensor_T_tip.rotation.T),
+    ])
 
 
 def _saturate(values: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
-    norm = float(np.linalg.norm(values))
+    norm = math.sqrt(float(values @ values))
     if norm > limit:
         return values * (limit / norm), True
     return values, False
@@ -160,22 +170,27 @@ def servo(
     configurations, rates_log, status = [q], [], []
     position_errors, orientation_errors, radii = [], [], []
 
-    def measure(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Record the errors and ρ at q; return the Jacobian and the controlled error."""
+    def measure(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, _small.Blocks | None]:
+        """Record the errors and ρ at q; return the Jacobian, the controlled error, the blocks."""
         jacobian, world_T_tip, world_T_sensor = robot.kinematics(q)
         error = pose_error(world_T_tip, world_T_sensor, goal)[index.rows]
-        position_errors.append(float(np.linalg.norm(error[:m])))
-        orientation_errors.append(float(np.linalg.norm(error[m:])))
+        linear, angular = error[:m], error[m:]
+        position_errors.append(math.sqrt(float(linear @ linear)))
+        orientation_errors.append(math.sqrt(float(angular @ angular)))
+        parts = _small.blocks(jacobian, index.row_lists, index.column_takers) if index.small else None
         try:
-            radii.append(convergence_from_blocks(*split_blocks(jacobian[rows], m, n_arm)).spectral_radius)
+            if parts is not None:
+                radii.append(_small.spectral_radius(parts))
+            else:
+                radii.append(convergence_from_blocks(*split_blocks(jacobian[rows], m, n_arm)).spectral_radius)
         except SingularBlockError:
             radii.append(math.inf)
-        return jacobian, error
+        return jacobian, error, parts
 
     best = math.inf
     reason, final = "", ""
     for step in range(int(max_steps) + 1):
-        jacobian, error = measure(q)
+        jacobian, error, parts = measure(q)
         total = position_errors[-1] + orientation_errors[-1]
         if position_errors[-1] < tol and orientation_errors[-1] < tol:
             final, reason = "converged", f"converged in {step} steps"
@@ -195,7 +210,7 @@ def servo(
         linear, saturated_linear = _saturate(gain * error[:m], max_linear_speed)
         angular, saturated_angular = _saturate(gain * error[m:], max_angular_speed)
         try:
-            rates = partition_rates(jacobian, index, np.concatenate([linear, angular]), algorithm)
+            rates = partition_rates(jacobian, index, np.concatenate([linear, angular]), algorithm, parts)
         except SingularBlockError as singular:
             final, reason = "singular", f"singular: {singular} at step {step}"
             break
