@@ -65,13 +65,20 @@ def measure(robot_name: str, *, batch: int, repeats: int, servo_steps: int) -> l
 
     rows = [
         ("pinocchio computeFrameJacobian (floor)", per_call_seconds(floor, batch=batch, repeats=repeats)),
-        ("pinrate sensor-frame Jacobian", per_call_seconds(lambda: robot.jacobian(q), batch=batch,
-                                                           repeats=repeats)),
+        (
+            "pinrate sensor-frame Jacobian",
+            per_call_seconds(lambda: robot.jacobian(q), batch=batch, repeats=repeats),
+        ),
     ]
     for algorithm in ("exact", "mca1", "mca2", "mca3", "schur", "dls"):
-        rows.append((f"pinrate {algorithm} step", per_call_seconds(step(algorithm), batch=batch, repeats=repeats)))
-    rows.append(("bare Pinocchio+numpy exact servo step", per_call_seconds(bare_servo_step, batch=batch,
-                                                                           repeats=repeats)))
+        seconds = per_call_seconds(step(algorithm), batch=batch, repeats=repeats)
+        rows.append((f"pinrate {algorithm} step", seconds))
+    rows.append(
+        (
+            "bare Pinocchio+numpy exact servo step",
+            per_call_seconds(bare_servo_step, batch=batch, repeats=repeats),
+        )
+    )
     servo_time = per_call_seconds(servo_step, batch=1, repeats=max(5, repeats // 4)) / servo_steps
     rows.append(("pinrate full servo step (mca1)", servo_time))
     assert rows_index.all_rows  # the bare step assumes the full 6 x nv Jacobian
@@ -97,10 +104,14 @@ def main() -> None:
     print()
     servo_ratio = timings["pinrate full servo step (mca1)"] / floor
     mca1_ratio = timings["pinrate mca1 step"] / exact
-    print(f"target: full servo step <= 3x floor      measured {servo_ratio:.2f}x  "
-          f"{'met' if servo_ratio <= 3 else 'NOT met'}")
-    print(f"target: mca1 step <= 0.8x exact step     measured {mca1_ratio:.2f}x  "
-          f"{'met' if mca1_ratio <= 0.8 else 'NOT met'}")
+    print(
+        f"target: full servo step <= 3x floor      measured {servo_ratio:.2f}x  "
+        f"{'met' if servo_ratio <= 3 else 'NOT met'}"
+    )
+    print(
+        f"target: mca1 step <= 0.8x exact step     measured {mca1_ratio:.2f}x  "
+        f"{'met' if mca1_ratio <= 0.8 else 'NOT met'}"
+    )
     bare = timings["bare Pinocchio+numpy exact servo step"] / floor
     print(f"(a servo step's bare Pinocchio+numpy calls alone cost {bare:.2f}x floor)")
 

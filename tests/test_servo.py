@@ -173,6 +173,8 @@ def test_pose_error_is_the_definition_in_sensor_axes(seed: int) -> None:
     np.testing.assert_allclose(error[3:], R_s.T @ pin.log3(target.rotation @ tip.rotation.T), atol=1e-9)
     # Sensor at the tip: the same definition with R_s = R_tip.
     at_tip = pose_error(tip, tip, target)
-    np.testing.assert_allclose(at_tip[:3], tip.rotation.T @ (target.translation - tip.translation), atol=1e-12)
-    np.testing.assert_allclose(at_tip[3:], tip.rotation.T @ pin.log3(target.rotation @ tip.rotation.T),
-                               atol=1e-9)
+    R_tip = tip.rotation
+    np.testing.assert_allclose(at_tip[:3], R_tip.T @ (target.translation - tip.translation), atol=1e-12)
+    np.testing.assert_allclose(
+        at_tip[3:], tip.rotation.T @ pin.log3(target.rotation @ tip.rotation.T), atol=1e-9
+    )

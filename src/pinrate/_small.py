@@ -98,8 +98,10 @@ def mca3(A: Matrix, B: Matrix, U: Matrix, W: Matrix, v: Vector, omega: Vector) -
     A_inv, W_inv = inverse(A, "A"), inverse(W, "W")
     wrist_only = _matvec(W_inv, omega)  # W^-1 Ω
     arm_only = _matvec(A_inv, v)  # A^-1 v
-    return (_matvec(A_inv, _minus_matvec(v, B, wrist_only)),
-            _matvec(W_inv, _minus_matvec(omega, U, arm_only)))
+    return (
+        _matvec(A_inv, _minus_matvec(v, B, wrist_only)),
+        _matvec(W_inv, _minus_matvec(omega, U, arm_only)),
+    )
 
 
 def schur(A: Matrix, B: Matrix, U: Matrix, W: Matrix, v: Vector, omega: Vector) -> tuple[Vector, Vector]:
@@ -107,14 +109,19 @@ def schur(A: Matrix, B: Matrix, U: Matrix, W: Matrix, v: Vector, omega: Vector) 
     k = len(W)
     # W^-1 U column by column, then the complement A - B W^-1 U.
     W_inv_U_columns = [solve(W, [U[r][c] for r in range(k)], "W") for c in range(len(A))]
-    complement = [[A[r][c] - sum(B[r][j] * W_inv_U_columns[c][j] for j in range(k)) for c in range(len(A))]
-                  for r in range(len(A))]
+    complement = [
+        [A[r][c] - sum(B[r][j] * W_inv_U_columns[c][j] for j in range(k)) for c in range(len(A))]
+        for r in range(len(A))
+    ]
     arm = solve(complement, _minus_matvec(v, B, solve(W, omega, "W")), "A - B W^-1 U")
     return arm, solve(W, _minus_matvec(omega, U, arm), "W")
 
 
 KERNELS: dict[str, Callable[..., tuple[Vector, Vector]]] = {
-    "mca1": mca1, "mca2": mca2, "mca3": mca3, "schur": schur,
+    "mca1": mca1,
+    "mca2": mca2,
+    "mca3": mca3,
+    "schur": schur,
 }
 
 
@@ -143,8 +150,12 @@ def blocks(jacobian: np.ndarray, rows: tuple[list[int], list[int]], columns: tup
     take_arm, take_wrist = columns
     linear = [full[r] for r in rows[0]]
     angular = [full[r] for r in rows[1]]
-    return ([take_arm(row) for row in linear], [take_wrist(row) for row in linear],
-            [take_arm(row) for row in angular], [take_wrist(row) for row in angular])
+    return (
+        [take_arm(row) for row in linear],
+        [take_wrist(row) for row in linear],
+        [take_arm(row) for row in angular],
+        [take_wrist(row) for row in angular],
+    )
 
 
 def block_rates(algorithm: str, parts: Blocks, twist: np.ndarray) -> Vector:

@@ -184,8 +184,13 @@ def check_algorithm(algorithm: object) -> str:
     return str(algorithm)
 
 
-def partition_rates(J: np.ndarray, index: PartitionIndex, twist: np.ndarray, algorithm: str,
-                    parts: _small.Blocks | None = None) -> np.ndarray:
+def partition_rates(
+    J: np.ndarray,
+    index: PartitionIndex,
+    twist: np.ndarray,
+    algorithm: str,
+    parts: _small.Blocks | None = None,
+) -> np.ndarray:
     """Joint rates (nv,) from a sensor-frame Jacobian (6, nv) and a twist in partition order.
 
     Joints outside the partition get rate 0. ``parts`` may hold the blocks as nested lists

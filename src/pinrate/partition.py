@@ -46,8 +46,11 @@ class PartitionIndex:
         set_ = object.__setattr__
         set_(self, "columns", columns)
         set_(self, "row_lists", (self.rows[: self.m].tolist(), self.rows[self.m :].tolist()))
-        set_(self, "column_takers", (_small.taker(self.arm_columns.tolist()),
-                                     _small.taker(self.wrist_columns.tolist())))
+        set_(
+            self,
+            "column_takers",
+            (_small.taker(self.arm_columns.tolist()), _small.taker(self.wrist_columns.tolist())),
+        )
         set_(self, "small", _small.eligible(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
         set_(self, "all_columns", columns.tolist() == list(range(self.nv)))
         set_(self, "all_rows", self.rows.tolist() == list(range(6)))

@@ -113,10 +113,12 @@ def pose_error(world_T_tip: pin.SE3, world_T_sensor: pin.SE3, target: pin.SE3) -
     if world_T_sensor is world_T_tip:
         return np.concatenate([sensor_T_target.translation, pin.log3(sensor_T_target.rotation)])
     sensor_T_tip = world_T_sensor.actInv(world_T_tip)
-    return np.concatenate([
-        sensor_T_target.translation - sensor_T_tip.translation,
-        pin.log3(sensor_T_target.rotation @ sensor_T_tip.rotation.T),
-    ])
+    return np.concatenate(
+        [
+            sensor_T_target.translation - sensor_T_tip.translation,
+            pin.log3(sensor_T_target.rotation @ sensor_T_tip.rotation.T),
+        ]
+    )
 
 
 def _saturate(values: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
