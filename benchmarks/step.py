@@ -2,8 +2,10 @@
 
 Run: ``make bench`` (or ``python benchmarks/step.py [--robot ur5] [--repeats 40]``).
 
-Every timing is the median over ``repeats`` batches of the per-call time of a batch of
-``batch`` calls, all measured in this one process, so the ratios compare like with like.
+Every timing is the median over ``repeats`` rounds of the per-call time of a batch of
+``batch`` calls. The rounds interleave all the measured steps (round-robin, in this one
+process), so a machine that slows down or speeds up shifts every step alike and the
+ratios compare like with like.
 The floor is Pinocchio's bare ``computeFrameJacobian`` of the tip (one C++ call through
 the Python binding), the least any resolved-rate step in Python must pay.
 """
@@ -22,17 +24,21 @@ import pinrate
 from pinrate.cli import demo_target
 
 
-def per_call_seconds(function: Callable[[], object], *, batch: int, repeats: int) -> float:
-    """Median over ``repeats`` batches of the mean time of one call in a batch of ``batch``."""
-    for _ in range(batch):  # warm caches and lazy set-up
-        function()
-    samples = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        for _ in range(batch):
+def interleaved_medians(
+    functions: dict[str, tuple[Callable[[], object], int]], repeats: int
+) -> dict[str, float]:
+    """Median seconds per call of each (function, batch size), measured round-robin."""
+    for function, batch in functions.values():  # warm caches and lazy set-up
+        for _ in range(min(batch, 20)):
             function()
-        samples.append((time.perf_counter() - start) / batch)
-    return statistics.median(samples)
+    samples: dict[str, list[float]] = {name: [] for name in functions}
+    for _ in range(repeats):
+        for name, (function, batch) in functions.items():
+            start = time.perf_counter()
+            for _ in range(batch):
+                function()
+            samples[name].append((time.perf_counter() - start) / batch)
+    return {name: statistics.median(values) for name, values in samples.items()}
 
 
 def measure(robot_name: str, *, batch: int, repeats: int, servo_steps: int) -> list[tuple[str, float]]:
@@ -63,26 +69,18 @@ def measure(robot_name: str, *, batch: int, repeats: int, servo_steps: int) -> l
     def servo_step() -> object:
         return pinrate.servo(robot, q, target, partition=partition, max_steps=servo_steps, tol=1e-12)
 
-    rows = [
-        ("pinocchio computeFrameJacobian (floor)", per_call_seconds(floor, batch=batch, repeats=repeats)),
-        (
-            "pinrate sensor-frame Jacobian",
-            per_call_seconds(lambda: robot.jacobian(q), batch=batch, repeats=repeats),
-        ),
-    ]
+    functions: dict[str, tuple[Callable[[], object], int]] = {
+        "pinocchio computeFrameJacobian (floor)": (floor, batch),
+        "pinrate sensor-frame Jacobian": (lambda: robot.jacobian(q), batch),
+    }
     for algorithm in ("exact", "mca1", "mca2", "mca3", "schur", "dls"):
-        seconds = per_call_seconds(step(algorithm), batch=batch, repeats=repeats)
-        rows.append((f"pinrate {algorithm} step", seconds))
-    rows.append(
-        (
-            "bare Pinocchio+numpy exact servo step",
-            per_call_seconds(bare_servo_step, batch=batch, repeats=repeats),
-        )
-    )
-    servo_time = per_call_seconds(servo_step, batch=1, repeats=max(5, repeats // 4)) / servo_steps
-    rows.append(("pinrate full servo step (mca1)", servo_time))
+        functions[f"pinrate {algorithm} step"] = (step(algorithm), batch)
+    functions["bare Pinocchio+numpy exact servo step"] = (bare_servo_step, batch)
+    functions["pinrate full servo step (mca1)"] = (servo_step, 1)  # one run, divided below
+    medians = interleaved_medians(functions, repeats)
+    medians["pinrate full servo step (mca1)"] /= servo_steps
     assert rows_index.all_rows  # the bare step assumes the full 6 x nv Jacobian
-    return rows
+    return list(medians.items())
 
 
 def main() -> None:

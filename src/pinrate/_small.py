@@ -130,32 +130,32 @@ def eligible(m: int, n_arm: int, k: int, n_wrist: int) -> bool:
     return m == n_arm and k == n_wrist and 0 < m <= 3 and k <= 3
 
 
-Take = Callable[[list[float]], list[float]]
+Selector = tuple[slice, slice] | tuple[np.ndarray, np.ndarray]
 
 
-def taker(columns: list[int]) -> Take:
-    """A fast row -> row[columns] for Python lists: a slice when the columns are contiguous."""
-    if columns and columns == list(range(columns[0], columns[-1] + 1)):
-        part = slice(columns[0], columns[-1] + 1)
-        return lambda row: row[part]
-    return lambda row: [row[c] for c in columns]
+def selector(rows: list[int], columns: list[int]) -> Selector:
+    """Index of J[rows, columns]: two slices when both are contiguous (one cheap view)."""
+
+    def as_slice(indices: list[int]) -> slice | None:
+        if not indices:
+            return slice(0, 0)
+        if indices == list(range(indices[0], indices[-1] + 1)):
+            return slice(indices[0], indices[-1] + 1)
+        return None
+
+    row_slice, column_slice = as_slice(rows), as_slice(columns)
+    if row_slice is not None and column_slice is not None:
+        return (row_slice, column_slice)
+    return np.ix_(rows, columns)
 
 
 Blocks = tuple[Matrix, Matrix, Matrix, Matrix]
 
 
-def blocks(jacobian: np.ndarray, rows: tuple[list[int], list[int]], columns: tuple[Take, Take]) -> Blocks:
+def blocks(jacobian: np.ndarray, selectors: tuple[Selector, Selector, Selector, Selector]) -> Blocks:
     """(A, B, U, W) of eq. 19 as nested lists, from the sensor-frame Jacobian (6, nv)."""
-    full = jacobian.tolist()
-    take_arm, take_wrist = columns
-    linear = [full[r] for r in rows[0]]
-    angular = [full[r] for r in rows[1]]
-    return (
-        [take_arm(row) for row in linear],
-        [take_wrist(row) for row in linear],
-        [take_arm(row) for row in angular],
-        [take_wrist(row) for row in angular],
-    )
+    a, b, u, w = selectors
+    return jacobian[a].tolist(), jacobian[b].tolist(), jacobian[u].tolist(), jacobian[w].tolist()
 
 
 def block_rates(algorithm: str, parts: Blocks, twist: np.ndarray) -> Vector:

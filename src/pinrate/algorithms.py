@@ -199,7 +199,7 @@ def partition_rates(
     """
     if index.small and algorithm in _small.KERNELS:
         if parts is None:
-            parts = _small.blocks(J, index.row_lists, index.column_takers)
+            parts = _small.blocks(J, index.selectors)
         solved = _small.block_rates(algorithm, parts, twist)
         if index.all_columns:
             return np.array(solved)

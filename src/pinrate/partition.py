@@ -38,19 +38,15 @@ class PartitionIndex:
     all_columns: bool = field(init=False)  # the columns are 0 .. nv-1 in order
     all_rows: bool = field(init=False)  # the rows are 0 .. 5 in order
     small: bool = field(init=False)  # square blocks of size <= 3: closed-form kernels apply
-    row_lists: tuple[list[int], list[int]] = field(init=False)
-    column_takers: tuple[_small.Take, _small.Take] = field(init=False)
+    selectors: tuple[_small.Selector, ...] = field(init=False)  # A, B, U, W in J
 
     def __post_init__(self) -> None:
         columns = np.concatenate([self.arm_columns, self.wrist_columns])
         set_ = object.__setattr__
         set_(self, "columns", columns)
-        set_(self, "row_lists", (self.rows[: self.m].tolist(), self.rows[self.m :].tolist()))
-        set_(
-            self,
-            "column_takers",
-            (_small.taker(self.arm_columns.tolist()), _small.taker(self.wrist_columns.tolist())),
-        )
+        linear, angular = self.rows[: self.m].tolist(), self.rows[self.m :].tolist()
+        arm, wrist = self.arm_columns.tolist(), self.wrist_columns.tolist()
+        set_(self, "selectors", tuple(_small.selector(r, c) for r in (linear, angular) for c in (arm, wrist)))
         set_(self, "small", _small.eligible(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
         set_(self, "all_columns", columns.tolist() == list(range(self.nv)))
         set_(self, "all_rows", self.rows.tolist() == list(range(6)))

@@ -179,7 +179,7 @@ def servo(
         linear, angular = error[:m], error[m:]
         position_errors.append(math.sqrt(float(linear @ linear)))
         orientation_errors.append(math.sqrt(float(angular @ angular)))
-        parts = _small.blocks(jacobian, index.row_lists, index.column_takers) if index.small else None
+        parts = _small.blocks(jacobian, index.selectors) if index.small else None
         try:
             if parts is not None:
                 radii.append(_small.spectral_radius(parts))
