@@ -21,6 +21,8 @@ for _ in range(100):
 end = robot.pose(q)
 
 moved = start[:3, :3].T @ (end[:3, 3] - start[:3, 3])  # displacement in the start hand frame
-print(f"after 1 s the hand moved {np.array2string(moved, precision=4)} m in its own axes "
-      "(asked: 0.05 along x, plus the small drift of a turning frame)")
+print(
+    f"after 1 s the hand moved {np.array2string(moved, precision=4)} m in its own axes "
+    "(asked: 0.05 along x, plus the small drift of a turning frame)"
+)
 print(f"spectral radius here: {pinrate.convergence(robot, q, partition=partition).spectral_radius:.3f}")
