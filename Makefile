@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: demo test lint bench urdf clean
+.PHONY: demo test lint bench urdf docs clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -31,3 +31,6 @@ clean:
 
 urdf: $(VENV)/.installed
 	$(BIN)/python -c "from pinrate.robots import write_urdfs; write_urdfs('urdf')"
+
+docs: $(VENV)/.installed
+	$(BIN)/pinrate paper > docs/paper-results.md

@@ -95,6 +95,13 @@ def _demo(args: argparse.Namespace) -> int:
     return 0 if trajectory.converged else 1
 
 
+def _paper(_: argparse.Namespace) -> int:
+    from .paper_results import markdown, results
+
+    print(markdown(results()), end="")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pinrate", description="Resolved-rate motion control for URDF arms."
@@ -104,6 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     listing = commands.add_parser("list", help="print every robot name pinrate can load")
     listing.set_defaults(run=_list)
+
+    paper = commands.add_parser("paper", help="recompute every result of the two papers (Markdown table)")
+    paper.set_defaults(run=_paper)
 
     demo = commands.add_parser("demo", help="servo a robot from home to a target and summarise")
     demo.add_argument("robot", help="a name from `pinrate list` or a URDF path")

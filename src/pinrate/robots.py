@@ -28,7 +28,9 @@ printed matrix; the tests check every one against its closed form):
 * ``spherical_6dof`` (Fig. 11, eq. 70): spherical arm theta1, theta2 (about the horizontal
   axis, positive pointing down), d3, and a wrist z-x-z (theta4, theta5, theta6) meeting at
   P; sensor at P on the third link (z radial, x along the theta2 axis); TCP at tool length l
-  beyond P along the theta6 axis. -90° < theta5 < 90° as in §5.3.
+  beyond P along the theta6 axis (a frame ``wrist_centre`` at P on the last link gives
+  B = 0). -90° < theta5 < 90° as in §5.3. Eq. 70's printed second column is a misprint: see
+  :mod:`pinrate.paper_results`.
 * ``barker_arm`` (Barker appendix A): the DH table with NO, ES, SN, WE, HW and alpha3, a3,
   r3. URDF link i is DH frame i-1 turned by theta_i about z_{i-1}; the next joint's origin
   is Rz(offset_i) Tz(r_i) Tx(a_i) Rx(alpha_i), so theta'_i = theta_i + offset_i as in the
@@ -264,19 +266,21 @@ def _cartesian(travel: float = 1.0) -> _Design:
     return _Design(u, "tcp", "tcp", {"d1": travel / 2, "d2": travel / 2, "d3": travel / 2, "theta5": 0.3})
 
 
-def _planar_polar(l: float = 0.2) -> _Design:  # noqa: E741 (the paper's name)
-    l = _positive("l", l)  # noqa: E741
+def _planar_polar(l: float = 0.2, d2_min: float = 0.05, d2_max: float = 1.0) -> _Design:  # noqa: E741
+    l, d2_min, d2_max = _positive("l", l), _positive("d2_min", d2_min), _positive("d2_max", d2_max)  # noqa: E741
+    if d2_min >= d2_max:
+        raise InputError(f"d2_min ({d2_min}) must be below d2_max ({d2_max})")
     u = _Urdf("planar_polar")
     u.link("base", _Shape("cylinder", (0.04, 0.04), colour="dark"))
     u.joint(_Joint("theta1", "revolute", "base", "link1"))
     u.link("link1", _rod((0, 0, 0), (0.05, 0, 0), 0.015, "dark"))
-    u.joint(_Joint("d2", "prismatic", "link1", "link2", axis=(1, 0, 0), limits=(0.05, 1.0)))
+    u.joint(_Joint("d2", "prismatic", "link1", "link2", axis=(1, 0, 0), limits=(d2_min, d2_max)))
     u.link("link2", _rod((-0.3, 0, 0), (0, 0, 0), 0.015, "blue"))
     u.joint(_Joint("sensor_joint", "fixed", "link2", "sensor"))
     u.joint(_Joint("theta3", "revolute", "link2", "link3"))
     u.link("link3", _rod((0, 0, 0), (l, 0, 0), 0.012, "orange"))
     u.joint(_Joint("tcp_joint", "fixed", "link3", "tcp", xyz=(l, 0, 0)))
-    return _Design(u, "tcp", "sensor", {"d2": 0.4, "theta3": 0.5})
+    return _Design(u, "tcp", "sensor", {"d2": min(max(0.4, d2_min), d2_max), "theta3": 0.5})
 
 
 def _scara_chain(name: str, l1: float, l2: float, l3: float, theta2_limits: tuple[float, float]) -> _Design:
@@ -325,6 +329,7 @@ def _spherical_6dof(l: float = 0.1, d3_min: float = 0.3, d3_max: float = 0.8) ->
     u.joint(_Joint("theta6", "revolute", "wrist2", "wrist3", axis=(0, 0, 1)))
     u.link("wrist3", _rod((0, 0, 0), (0, 0, l), 0.012, "orange"))
     u.joint(_Joint("tcp_joint", "fixed", "wrist3", "tcp", xyz=(0, 0, l)))
+    u.joint(_Joint("wrist_centre_joint", "fixed", "wrist3", "wrist_centre"))  # P, on the last link
     return _Design(u, "tcp", "sensor", {"theta2": 0.3, "d3": (d3_min + d3_max) / 2, "theta5": 0.5})
 
 
@@ -448,7 +453,7 @@ def cartesian(**lengths: float) -> Robot:
 
 
 def planar_polar(**lengths: float) -> Robot:
-    """Planar polar robot of Fig. 4 (eq. 55-58): l (default 0.2)."""
+    """Planar polar robot of Fig. 4 (eq. 55-58): l (default 0.2), stroke d2_min .. d2_max."""
     return build("planar_polar", **lengths)
 
 
