@@ -14,7 +14,7 @@ $(VENV)/.installed: $(BIN)/python pyproject.toml
 	touch $@
 
 demo: $(VENV)/.installed
-	$(BIN)/pinrate demo ur5 --no-viewer
+	$(BIN)/pinrate demo ur5
 
 test: $(VENV)/.installed
 	$(BIN)/ruff check src tests examples benchmarks

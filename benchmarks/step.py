@@ -24,9 +24,7 @@ import pinrate
 from pinrate.cli import demo_target
 
 
-def interleaved_medians(
-    functions: dict[str, tuple[Callable[[], object], int]], repeats: int
-) -> dict[str, float]:
+def interleaved_medians(functions: dict[str, tuple[Callable[[], object], int]], repeats: int) -> dict[str, float]:
     """Median seconds per call of each (function, batch size), measured round-robin."""
     for function, batch in functions.values():  # warm caches and lazy set-up
         for _ in range(min(batch, 20)):

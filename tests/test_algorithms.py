@@ -146,9 +146,7 @@ def test_mca2_is_exact_when_wrist_axes_meet_at_the_tcp() -> None:
         _A, B, _U, _W = partition.blocks(robot, robot.jacobian(q))
         np.testing.assert_allclose(B, 0.0, atol=1e-12)
         exact = pinrate.joint_rates(robot, q, twist, algorithm="exact")
-        np.testing.assert_allclose(
-            pinrate.joint_rates(robot, q, twist, algorithm="mca2"), exact, rtol=1e-8, atol=1e-8
-        )
+        np.testing.assert_allclose(pinrate.joint_rates(robot, q, twist, algorithm="mca2"), exact, rtol=1e-8, atol=1e-8)
 
 
 def test_mca1_is_exact_on_a_cartesian_arm() -> None:

@@ -40,7 +40,5 @@ def test_demo_bad_robot_is_a_clear_error(capsys: pytest.CaptureFixture[str]) -> 
 
 
 def test_console_script_runs() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "pinrate.cli", "list"], capture_output=True, text=True, check=False
-    )
+    result = subprocess.run([sys.executable, "-m", "pinrate.cli", "list"], capture_output=True, text=True, check=False)
     assert result.returncode == 0 and "ur5" in result.stdout

@@ -124,9 +124,7 @@ def test_linear_rows_rotated_back_are_world_velocities(ur5: pinrate.Robot) -> No
     q = ur5.random_configuration(4)
     world_rotation = ur5.pose(q)[:3, :3]
     jacobian = ur5.jacobian(q)
-    np.testing.assert_allclose(
-        world_rotation @ jacobian[:3], finite_difference_world_linear(ur5, q), atol=1e-6
-    )
+    np.testing.assert_allclose(world_rotation @ jacobian[:3], finite_difference_world_linear(ur5, q), atol=1e-6)
 
 
 def finite_difference_world_linear(robot: pinrate.Robot, q: np.ndarray, step: float = 1e-6) -> np.ndarray:

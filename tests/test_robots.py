@@ -18,9 +18,7 @@ URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
 def test_checked_in_urdf_is_in_sync_with_its_generator(name: str) -> None:
     path = URDF_DIR / f"{name}.urdf"
     assert path.is_file(), f"urdf/{name}.urdf missing: run `make urdf`"
-    assert path.read_text(encoding="utf-8") == robots.urdf(name), (
-        f"urdf/{name}.urdf is stale: run `make urdf`"
-    )
+    assert path.read_text(encoding="utf-8") == robots.urdf(name), f"urdf/{name}.urdf is stale: run `make urdf`"
 
 
 @pytest.mark.parametrize("name", robots.ROBOT_NAMES)

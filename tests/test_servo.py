@@ -39,12 +39,8 @@ def test_errors_are_measured_at_each_q(ur5: pinrate.Robot) -> None:
     for i in (0, 10, 30):
         pose = ur5.pose(trajectory.q[i])
         assert trajectory.position_error[i] == pytest.approx(np.linalg.norm(pose[:3, 3] - target[:3, 3]))
-        assert trajectory.orientation_error[i] == pytest.approx(
-            rotation_angle(pose[:3, :3], target[:3, :3]), abs=1e-9
-        )
-        assert trajectory.spectral_radius[i] == pytest.approx(
-            pinrate.convergence(ur5, trajectory.q[i]).spectral_radius
-        )
+        assert trajectory.orientation_error[i] == pytest.approx(rotation_angle(pose[:3, :3], target[:3, :3]), abs=1e-9)
+        assert trajectory.spectral_radius[i] == pytest.approx(pinrate.convergence(ur5, trajectory.q[i]).spectral_radius)
     assert not trajectory.converged and trajectory.reason.startswith("max_steps")
 
 
@@ -148,9 +144,7 @@ def test_bad_targets(ur5: pinrate.Robot, target: object, match: str) -> None:
         pinrate.servo(ur5, ur5.home(), target)
 
 
-@pytest.mark.parametrize(
-    ("keyword", "value"), [("dt", 0.0), ("gain", -1.0), ("tol", math.nan), ("max_steps", -1)]
-)
+@pytest.mark.parametrize(("keyword", "value"), [("dt", 0.0), ("gain", -1.0), ("tol", math.nan), ("max_steps", -1)])
 def test_bad_settings(ur5: pinrate.Robot, keyword: str, value: float) -> None:
     with pytest.raises(pinrate.InputError, match=keyword):
         pinrate.servo(ur5, ur5.home(), ur5.pose(ur5.home()), **{keyword: value})
@@ -175,6 +169,4 @@ def test_pose_error_is_the_definition_in_sensor_axes(seed: int) -> None:
     at_tip = pose_error(tip, tip, target)
     R_tip = tip.rotation
     np.testing.assert_allclose(at_tip[:3], R_tip.T @ (target.translation - tip.translation), atol=1e-12)
-    np.testing.assert_allclose(
-        at_tip[3:], tip.rotation.T @ pin.log3(target.rotation @ tip.rotation.T), atol=1e-9
-    )
+    np.testing.assert_allclose(at_tip[3:], tip.rotation.T @ pin.log3(target.rotation @ tip.rotation.T), atol=1e-9)

@@ -248,9 +248,7 @@ def joint_rates(
     q = robot.check_q(q)
     partition = Partition.auto(robot) if partition is None else partition
     index = partition.resolve(robot)
-    twist = check_vector(
-        twist, index.rows.size, f"twist (partition {partition.linear!r}+{partition.angular!r})"
-    )
+    twist = check_vector(twist, index.rows.size, f"twist (partition {partition.linear!r}+{partition.angular!r})")
     jacobian = robot.sensor_jacobian(q)
     try:
         return partition_rates(jacobian, index, twist, algorithm)

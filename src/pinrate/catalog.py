@@ -153,8 +153,7 @@ def example_robot_path(relative: str) -> Path:
     share = example_robot_data_share()
     if share is None:
         raise LoadError(
-            "example-robot-data is not installed (or is not the 6.x data wheel): "
-            "pip install example-robot-data"
+            "example-robot-data is not installed (or is not the 6.x data wheel): pip install example-robot-data"
         )
     path = share / "example-robot-data" / "robots" / relative
     if not path.is_file():

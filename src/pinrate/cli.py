@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+import time
 from collections.abc import Sequence
 
 import numpy as np
@@ -67,32 +68,80 @@ def summary(robot: Robot, trajectory: Trajectory) -> str:
     return "\n".join(lines)
 
 
+def status_line(index: int, count: int, trajectory: Trajectory) -> str:
+    """One console line per servo segment."""
+    finite = trajectory.spectral_radius[np.isfinite(trajectory.spectral_radius)]
+    radius = f"{finite.min():.3f}..{finite.max():.3f}" if finite.size else "undefined"
+    return (
+        f"segment {index}/{count}  {trajectory.algorithm}  {trajectory.steps} steps  "
+        f"{'converged' if trajectory.converged else 'NOT converged'}  "
+        f"position {trajectory.position_error[-1]:.2e} m  orientation {trajectory.orientation_error[-1]:.2e} rad  "
+        f"rho {radius}" + ("" if trajectory.converged else f"  ({trajectory.reason})")
+    )
+
+
+def _targets(args: argparse.Namespace, robot: Robot, partition: Partition) -> list[np.ndarray]:
+    if args.target is not None:
+        x, y, z, roll, pitch, yaw = args.target
+        return [pin.SE3(pin.rpy.rpyToMatrix(roll, pitch, yaw), np.array([x, y, z])).homogeneous]
+    return [demo_target(robot, partition, args.seed + k)[1] for k in range(args.targets)]
+
+
 def _demo(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip, sensor=args.sensor)
     partition = Partition.auto(robot)
-    if args.target is not None:
-        x, y, z, roll, pitch, yaw = args.target
-        target = pin.SE3(pin.rpy.rpyToMatrix(roll, pitch, yaw), np.array([x, y, z])).homogeneous
-    else:
-        _, target = demo_target(robot, partition, args.seed)
-    trajectory = servo(
-        robot,
-        robot.home(),
-        target,
-        algorithm=args.algorithm,
-        partition=partition,
-        dt=args.dt,
-        gain=args.gain,
-        max_steps=args.max_steps,
-        tol=args.tol,
-    )
-    position, rpy = target[:3, 3], pin.rpy.matrixToRpy(target[:3, :3])
-    print(
-        f"target     xyz {np.array2string(position, precision=4)} m   "
-        f"rpy {np.array2string(rpy, precision=4)} rad (world)"
-    )
-    print(summary(robot, trajectory))
-    return 0 if trajectory.converged else 1
+    targets = _targets(args, robot, partition)
+    viewer = None
+    if not args.no_viewer:
+        from .viewer import Viewer  # meshcat only when a view is asked for
+
+        viewer = Viewer(robot, host=args.host, open_browser=args.open)
+        print(f"Meshcat viewer: {viewer.url}", flush=True)
+    try:
+        q = robot.home()
+        if viewer is not None:
+            viewer.show(q)
+        all_converged = True
+        for index, target in enumerate(targets, start=1):
+            trajectory = servo(
+                robot,
+                q,
+                target,
+                algorithm=args.algorithm,
+                partition=partition,
+                dt=args.dt,
+                gain=args.gain,
+                max_steps=args.max_steps,
+                tol=args.tol,
+            )
+            position, rpy = target[:3, 3], pin.rpy.matrixToRpy(target[:3, :3])
+            print(
+                f"target     xyz {np.array2string(position, precision=4)} m   "
+                f"rpy {np.array2string(rpy, precision=4)} rad (world)"
+            )
+            if len(targets) == 1 and viewer is None:
+                print(summary(robot, trajectory))
+            else:
+                if index == 1:
+                    print("partition  " + str(partition).replace("\n", "\n           "))
+                print(status_line(index, len(targets), trajectory), flush=True)
+            if viewer is not None:
+                viewer.play(trajectory, target=target, speed=args.speed)
+            all_converged &= trajectory.converged
+            q = trajectory.q[-1]
+        if viewer is not None:
+            if args.record:
+                print(f"recorded   {viewer.save_html(args.record)} ({viewer.recorded_frames} frames)")
+            if sys.stdin.isatty() and sys.stdout.isatty():
+                print("The view stays up: Ctrl-C to quit.", flush=True)
+                while True:
+                    time.sleep(3600)
+        return 0 if all_converged else 1
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        if viewer is not None:
+            viewer.close()
 
 
 def _paper(_: argparse.Namespace) -> int:
@@ -103,9 +152,7 @@ def _paper(_: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="pinrate", description="Resolved-rate motion control for URDF arms."
-    )
+    parser = argparse.ArgumentParser(prog="pinrate", description="Resolved-rate motion control for URDF arms.")
     parser.add_argument("-v", "--verbose", action="store_true", help="log what pinrate chooses")
     commands = parser.add_subparsers(dest="command", required=True)
 
@@ -132,18 +179,21 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--gain", type=float, default=1.0, help="twist per unit pose error (1/s)")
     demo.add_argument("--max-steps", type=int, default=2000)
     demo.add_argument("--tol", type=float, default=1e-4, help="convergence tolerance (m and rad)")
+    demo.add_argument("--targets", type=int, default=1, help="number of random targets, one after the other")
+    demo.add_argument("--speed", type=float, default=1.0, help="playback speed in the viewer (x real time)")
+    demo.add_argument("--open", action="store_true", help="open the viewer in the default browser")
+    demo.add_argument("--record", metavar="HTML", help="write a standalone HTML replay of the whole run")
     demo.add_argument(
-        "--no-viewer", action="store_true", help="headless run (the only mode until the Meshcat view lands)"
+        "--host", default="127.0.0.1", help="address the Meshcat server listens on (default: this machine only)"
     )
+    demo.add_argument("--no-viewer", action="store_true", help="headless: print the summary only")
     demo.set_defaults(run=_demo)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    logging.basicConfig(
-        level=logging.INFO if args.verbose else logging.WARNING, format="pinrate: %(message)s"
-    )
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="pinrate: %(message)s")
     try:
         return int(args.run(args))
     except PinrateError as error:

@@ -36,9 +36,7 @@ class Convergence:
     converges: bool
 
 
-def convergence_matrices(
-    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def convergence_matrices(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(G, H) = (U A^-1 B W^-1, B W^-1 U A^-1) (eq. 32, 50); pseudo-inverses for non-square blocks."""
     P = U @ inverse(A, "A")
     Q = B @ inverse(W, "W")
@@ -66,8 +64,7 @@ def convergence(robot: Robot, q: object, *, partition: Partition | None = None) 
         return convergence_from_blocks(*partition.blocks(robot, robot.kinematics(q)[0]))
     except SingularBlockError as error:
         raise SingularBlockError(
-            f"{error} for robot {robot.name!r} at q = "
-            f"{np.array2string(q, precision=4)}: G and H are undefined",
+            f"{error} for robot {robot.name!r} at q = {np.array2string(q, precision=4)}: G and H are undefined",
             block=error.block,
             q=q,
         ) from None

@@ -33,12 +33,7 @@ def _joint_range(robot: Robot, joint: str) -> tuple[float, float]:
     joint_model = robot.model.joints[robot.joint_id(joint)]
     lower, upper = robot.position_limits()
     i = joint_model.idx_q
-    if (
-        joint_model.nq == 1
-        and math.isfinite(lower[i])
-        and math.isfinite(upper[i])
-        and upper[i] - lower[i] < 1e6
-    ):
+    if joint_model.nq == 1 and math.isfinite(lower[i]) and math.isfinite(upper[i]) and upper[i] - lower[i] < 1e6:
         return float(lower[i]), float(upper[i])
     return -math.pi, math.pi
 
@@ -72,8 +67,7 @@ def independent_joints(
         lower, upper = _joint_range(robot, joint)
         _set_joint(robot, moved, joint, generator.uniform(lower, upper, samples))
         change = max(
-            np.abs(robot.sensor_jacobian(q) - jacobian).max()
-            for q, jacobian in zip(moved, jacobians, strict=True)
+            np.abs(robot.sensor_jacobian(q) - jacobian).max() for q, jacobian in zip(moved, jacobians, strict=True)
         )
         if change <= _DEPENDENCE_TOL * scale:
             independent.append(joint)
@@ -126,9 +120,7 @@ def grid_check(
         )
     axes = [np.linspace(*_joint_range(robot, joint), points) for joint in joints]
     configurations = np.tile(robot.home(), (count, 1))
-    for joint, values in zip(
-        joints, np.array(list(itertools.product(*axes))).T if joints else [], strict=False
-    ):
+    for joint, values in zip(joints, np.array(list(itertools.product(*axes))).T if joints else [], strict=False):
         _set_joint(robot, configurations, joint, values)
     index = partition.resolve(robot)
     jacobians = partition_jacobians(robot, configurations, partition)

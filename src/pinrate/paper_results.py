@@ -49,9 +49,7 @@ class Result:
     test: str
 
 
-def _max_over_configurations(
-    robot: Robot, count: int, function: Callable[[np.ndarray], float], seed: int = 0
-) -> float:
+def _max_over_configurations(robot: Robot, count: int, function: Callable[[np.ndarray], float], seed: int = 0) -> float:
     return max(function(q) for q in robot.sample_configurations(count, seed))
 
 
@@ -148,8 +146,7 @@ def mca2_minus_exact(robot: Robot, count: int = 50) -> float:
             worst,
             float(
                 np.abs(
-                    joint_rates(robot, q, twist, algorithm="mca2")
-                    - joint_rates(robot, q, twist, algorithm="exact")
+                    joint_rates(robot, q, twist, algorithm="mca2") - joint_rates(robot, q, twist, algorithm="exact")
                 ).max()
             ),
         )
@@ -204,9 +201,7 @@ def scara_boundary_agreement(count: int = 5000) -> float:
 
 def hirata_rule(points: int = 121) -> float:
     """The largest tool length l3 (m) with worst ρ < 1 on the Hirata ARH-300."""
-    return design.largest_parameter(
-        lambda l3: robots.hirata_arh300(l3=l3), 0.01, 0.3, points=points, tolerance=1e-6
-    )
+    return design.largest_parameter(lambda l3: robots.hirata_arh300(l3=l3), 0.01, 0.3, points=points, tolerance=1e-6)
 
 
 HIRATA_CLOSED_FORM = 0.275 * math.sin(math.radians(25)) / 2
@@ -250,16 +245,12 @@ def spherical_6dof_deviations(count: int = 300) -> tuple[float, float]:
     l = 0.1  # noqa: E741
     worst_jacobian = worst_eigen = 0.0
     for q in robot.sample_configurations(count, 6):
-        worst_jacobian = max(
-            worst_jacobian, float(np.abs(robot.jacobian(q) - spherical_6dof_jacobian(q, l)).max())
-        )
+        worst_jacobian = max(worst_jacobian, float(np.abs(robot.jacobian(q) - spherical_6dof_jacobian(q, l)).max()))
         try:
             found = np.sort(np.abs(convergence(robot, q).eigenvalues))
         except SingularBlockError:
             continue
-        worst_eigen = max(
-            worst_eigen, float(np.abs(found - np.sort(np.abs(spherical_6dof_eigenvalues(q, l)))).max())
-        )
+        worst_eigen = max(worst_eigen, float(np.abs(found - np.sort(np.abs(spherical_6dof_eigenvalues(q, l)))).max()))
     return worst_jacobian, worst_eigen
 
 
@@ -617,8 +608,7 @@ def results() -> list[Result]:
         Result(
             "S&K Fig. 6(b)",
             "polar, MCA2: λ -1.5 -> -0.9, diverges",
-            f"dead-beat sensor, λ {polar_b.start_lambda:.2f} -> {polar_b.target_lambda:.2f}: "
-            f"{_outcome(polar_b)}",
+            f"dead-beat sensor, λ {polar_b.start_lambda:.2f} -> {polar_b.target_lambda:.2f}: {_outcome(polar_b)}",
             "test_paper_results.py::test_fig_6",
         )
     )
@@ -627,8 +617,7 @@ def results() -> list[Result]:
         Result(
             "S&K Fig. 9(a)",
             "SCARA, MCA2: λ 0.695 -> 0.718, converges",
-            f"printed poses, λ {scara_a.start_lambda:.3f} -> {scara_a.target_lambda:.3f}: "
-            f"{_outcome(scara_a)}",
+            f"printed poses, λ {scara_a.start_lambda:.3f} -> {scara_a.target_lambda:.3f}: {_outcome(scara_a)}",
             "test_paper_results.py::test_fig_9",
         )
     )

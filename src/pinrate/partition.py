@@ -125,9 +125,7 @@ class Partition:
         U = J[angular, arm], W = J[angular, wrist]."""
         jacobian = np.asarray(J, dtype=float)
         if jacobian.shape != (6, robot.nv):
-            raise InputError(
-                f"J must have shape (6, {robot.nv}) for robot {robot.name!r}, got {jacobian.shape}"
-            )
+            raise InputError(f"J must have shape (6, {robot.nv}) for robot {robot.name!r}, got {jacobian.shape}")
         index = self.resolve(robot)
         return split_blocks(jacobian[np.ix_(index.rows, index.columns)], index.m, len(index.arm_columns))
 
@@ -136,10 +134,8 @@ class Partition:
             return ", ".join(names) if names else "none"
 
         lines = [
-            f"arm ({len(self.arm)} joints, drive linear {self.linear or 'none'} through A): "
-            f"{joints(self.arm)}",
-            f"wrist ({len(self.wrist)} joints, drive angular {self.angular or 'none'} through W): "
-            f"{joints(self.wrist)}",
+            f"arm ({len(self.arm)} joints, drive linear {self.linear or 'none'} through A): {joints(self.arm)}",
+            f"wrist ({len(self.wrist)} joints, drive angular {self.angular or 'none'} through W): {joints(self.wrist)}",
             f"A is {self.m}x{len(self.arm)}, W is {self.k}x{len(self.wrist)}; "
             f"G = U A^-1 B W^-1 is {self.k}x{self.k}, H = B W^-1 U A^-1 is {self.m}x{self.m}",
         ]
@@ -157,9 +153,7 @@ class Partition:
         cached = robot.__dict__.get("_auto_partition")
         if cached is not None:
             return cached
-        samples = np.vstack(
-            [robot.neutral(), robot.home(), robot.sample_configurations(_AUTO_SAMPLES, rng=20260101)]
-        )
+        samples = np.vstack([robot.neutral(), robot.home(), robot.sample_configurations(_AUTO_SAMPLES, rng=20260101)])
         magnitude = np.zeros((6, robot.nv))
         for q in samples:
             magnitude = np.maximum(magnitude, np.abs(robot.jacobian(q)))
@@ -177,9 +171,7 @@ class Partition:
         return partition
 
 
-def split_blocks(
-    jacobian: np.ndarray, m: int, n_arm: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def split_blocks(jacobian: np.ndarray, m: int, n_arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(A, B, U, W) of a Jacobian already restricted to the partition's rows and columns."""
     return (jacobian[:m, :n_arm], jacobian[:m, n_arm:], jacobian[m:, :n_arm], jacobian[m:, n_arm:])
 

@@ -94,9 +94,7 @@ class Robot:
         else:
             self.tip_id = resolve_frame(model, tip, role="tip", robot=self.name)
         self.tip = model.frames[self.tip_id].name
-        self.sensor_id = (
-            self.tip_id if sensor is None else resolve_frame(model, sensor, role="sensor", robot=self.name)
-        )
+        self.sensor_id = self.tip_id if sensor is None else resolve_frame(model, sensor, role="sensor", robot=self.name)
         self.sensor = model.frames[self.sensor_id].name
 
         self.joint_names: tuple[str, ...] = tuple(
@@ -134,9 +132,7 @@ class Robot:
     def tip_chain(self) -> tuple[str, ...]:
         """The moving joints that support the tip, base to tip."""
         parent = self.model.frames[self.tip_id].parentJoint
-        return tuple(
-            self.model.names[j] for j in self.model.supports[parent] if j > 0 and self.model.joints[j].nv > 0
-        )
+        return tuple(self.model.names[j] for j in self.model.supports[parent] if j > 0 and self.model.joints[j].nv > 0)
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, nq={self.nq}, nv={self.nv}, tip={self.tip!r}, sensor={self.sensor!r})"
@@ -272,9 +268,7 @@ class Robot:
                     self.model, str(self._urdf_path), pin.GeometryType.VISUAL, package_dirs=self._package_dirs
                 )
         except (RuntimeError, ValueError, OSError) as error:
-            warnings.warn(
-                f"{self.name}: visual meshes not loaded ({error}); kinematics unaffected", stacklevel=2
-            )
+            warnings.warn(f"{self.name}: visual meshes not loaded ({error}); kinematics unaffected", stacklevel=2)
         return pin.GeometryModel()
 
 
@@ -387,9 +381,7 @@ def robot_from_urdf(
             pin.loadReferenceConfigurations(model, str(srdf_path), False)
             references = {entry.key(): np.array(entry.data()) for entry in model.referenceConfigurations}
         except (RuntimeError, ValueError) as error:
-            warnings.warn(
-                f"{label}: reference configurations not read from {srdf_path}: {error}", stacklevel=3
-            )
+            warnings.warn(f"{label}: reference configurations not read from {srdf_path}: {error}", stacklevel=3)
     if home is not None and home in references:
         references["home"] = references[home].copy()
     if home_values:

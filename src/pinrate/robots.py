@@ -360,15 +360,11 @@ def _barker_arm(
     colours = ["dark", "blue", "blue", "orange", "grey", "green"]
     for i, (alpha, a, r, offset, limit) in enumerate(table, start=1):
         link = f"link{i}"
-        u.joint(
-            _Joint(f"theta{i}", "revolute", parent, link, rotation, xyz, limits=(-limit * _DEG, limit * _DEG))
-        )
+        u.joint(_Joint(f"theta{i}", "revolute", parent, link, rotation, xyz, limits=(-limit * _DEG, limit * _DEG)))
         # DH: frame i = Rz(theta'_i) Tz(r_i) Tx(a_i) Rx(alpha_i) in frame i-1 (Barker eq. 1).
         turn = _rotation("z", offset)
         end = turn @ np.array([a, 0.0, r])
-        u.link(
-            link, _rod((0, 0, 0), (0, 0, r), 0.03, colours[i - 1]), _rod((0, 0, r), end, 0.03, colours[i - 1])
-        )
+        u.link(link, _rod((0, 0, 0), (0, 0, r), 0.03, colours[i - 1]), _rod((0, 0, r), end, 0.03, colours[i - 1]))
         parent, rotation, xyz = link, turn @ _rotation("x", alpha), tuple(end)
     u.joint(_Joint("hand_joint", "fixed", "link6", "hand", rotation, xyz))
     # The wrist centre: frames 4 and 5 meet at the origin of link 6's joint; hand axes.
@@ -408,9 +404,7 @@ def _generate(name: str, lengths: dict[str, float]) -> _Design:
     generator = _generator(name)
     unknown = sorted(set(lengths) - set(parameters(name)))
     if unknown:
-        raise InputError(
-            f"{name} has no parameter(s) {unknown}; its parameters: {', '.join(parameters(name))}"
-        )
+        raise InputError(f"{name} has no parameter(s) {unknown}; its parameters: {', '.join(parameters(name))}")
     return generator(**lengths)
 
 

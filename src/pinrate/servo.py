@@ -200,10 +200,7 @@ def servo(
         best = min(best, total)
         if total > DIVERGENCE_FACTOR * best + tol:
             final = "diverging"
-            reason = (
-                f"diverging: error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best "
-                f"{best:.4g} at step {step}"
-            )
+            reason = f"diverging: error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best {best:.4g} at step {step}"
             break
         if step == max_steps:
             final, reason = "max steps", f"max_steps ({max_steps}) reached"

@@ -1,0 +1,158 @@
+"""The viewer without a browser: server lifetime, binding, drawing data, the demo command."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from urllib.parse import urlparse
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pinrate
+from pinrate.viewer import MeshcatServer, Viewer, path_colours
+
+
+def process_alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().split()[2] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def listening_addresses(port: int) -> set[str]:
+    """Local IPv4 addresses listening on ``port`` (from /proc/net/tcp, Linux)."""
+    addresses = set()
+    with open("/proc/net/tcp") as table:
+        for line in table.readlines()[1:]:
+            local, state = line.split()[1], line.split()[3]
+            address, port_hex = local.split(":")
+            if state == "0A" and int(port_hex, 16) == port:
+                addresses.add(".".join(str(int(address[i : i + 2], 16)) for i in (6, 4, 2, 0)))
+    return addresses
+
+
+linux_only = pytest.mark.skipif(not os.path.exists("/proc/net/tcp"), reason="needs Linux /proc")
+
+
+@linux_only
+def test_server_listens_on_loopback_only_and_closes() -> None:
+    server = MeshcatServer()
+    try:
+        port = urlparse(server.web_url).port
+        assert listening_addresses(port) == {"127.0.0.1"}
+    finally:
+        server.close()
+    time.sleep(0.2)
+    assert not process_alive(server.pid)
+    assert listening_addresses(port) == set()
+
+
+@linux_only
+def test_server_dies_with_a_killed_parent() -> None:
+    script = textwrap.dedent("""
+        import sys, time
+        from pinrate.viewer import MeshcatServer
+        server = MeshcatServer()
+        print(server.pid, server.web_url, flush=True)
+        time.sleep(60)
+    """)
+    parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        pid, url = parent.stdout.readline().split()
+        assert process_alive(int(pid))
+        parent.kill()  # no atexit, no finally: only the server's own watch can save us
+        parent.wait()
+        deadline = time.monotonic() + 10
+        while process_alive(int(pid)) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not process_alive(int(pid)), "the orphaned Meshcat server is still running"
+        port = urlparse(url).port
+        while listening_addresses(port) and time.monotonic() < deadline:  # the kernel frees it just after
+            time.sleep(0.1)
+        assert listening_addresses(port) == set()
+    finally:
+        parent.kill()
+        parent.stdout.close()
+
+
+@linux_only
+def test_ctrl_c_on_the_demo_closes_the_server() -> None:
+    demo = subprocess.Popen([sys.executable, "-m", "pinrate.cli", "demo", "scara", "--speed", "0.2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = demo.stdout.readline()
+        assert line.startswith("Meshcat viewer: http://127.0.0.1:"), line
+        port = urlparse(line.split()[-1]).port
+        time.sleep(1.0)
+        demo.send_signal(signal.SIGINT)
+        assert demo.wait(timeout=20) == 0
+        deadline = time.monotonic() + 5
+        while listening_addresses(port) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert listening_addresses(port) == set()
+    finally:
+        demo.kill()
+        demo.stdout.close()
+        demo.stderr.close()
+
+
+def test_path_colours() -> None:
+    colours = path_colours(np.array([0.2, 0.99, 1.0, 3.0, np.inf]))
+    assert colours.shape == (3, 5)
+    np.testing.assert_array_equal(colours[:, 0], colours[:, 1])  # both converge: one colour
+    np.testing.assert_array_equal(colours[:, 2], colours[:, 4])  # ρ >= 1 and undefined: the other
+    assert not np.array_equal(colours[:, 0], colours[:, 2])
+
+
+@pytest.fixture(scope="module")
+def scara_viewer():
+    viewer = Viewer(pinrate.robots.scara())
+    yield viewer
+    viewer.close()
+
+
+def test_node_transforms_are_pinocchio_placements(scara_viewer) -> None:
+    robot = scara_viewer.robot
+    q = robot.random_configuration(4)
+    transforms = scara_viewer.node_transforms(q)
+    data = robot.model.createData()
+    geometry_data = robot.visual_model.createData()
+    pin.forwardKinematics(robot.model, data, q)
+    pin.updateGeometryPlacements(robot.model, data, robot.visual_model, geometry_data)
+    assert len([name for name in transforms if name.startswith("pinrate/")]) == robot.visual_model.ngeoms
+    for index, geometry in enumerate(robot.visual_model.geometryObjects):
+        np.testing.assert_allclose(transforms[f"pinrate/visuals/{geometry.name}"],
+                                   geometry_data.oMg[index].homogeneous, atol=1e-12)
+    np.testing.assert_allclose(transforms["markers/tcp"], robot.pose(q), atol=1e-12)
+
+
+def test_play_records_frames_and_writes_html(scara_viewer, tmp_path) -> None:
+    robot = scara_viewer.robot
+    target = robot.pose(robot.random_configuration(2))
+    trajectory = pinrate.servo(robot, robot.home(), target, max_steps=60)
+    before = scara_viewer.recorded_frames
+    scara_viewer.play(trajectory, target=target, realtime=False, fps=20)
+    assert scara_viewer.recorded_frames > before
+    html = scara_viewer.save_html(tmp_path / "run.html")
+    text = html.read_text()
+    assert text.startswith("\n") or "<html>" in text
+    assert "set_animation" in text or "animations" in text
+    with pytest.raises(ValueError, match="points"):
+        scara_viewer.add_path(np.zeros((3, 2)), [0.1, 0.2, 0.3])
+
+
+def test_demo_records_html(tmp_path) -> None:
+    out = tmp_path / "demo.html"
+    result = subprocess.run([sys.executable, "-m", "pinrate.cli", "demo", "planar_polar", "--speed", "1000",
+                             "--targets", "2", "--record", str(out)], capture_output=True, text=True, timeout=120,
+                            check=False)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "segment 1/2" in result.stdout and "segment 2/2" in result.stdout
+    assert out.stat().st_size > 10_000
