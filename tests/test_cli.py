@@ -27,7 +27,9 @@ def test_demo_ur5_converges_and_summarises(capsys: pytest.CaptureFixture[str]) -
 
 
 def test_demo_with_explicit_target(capsys: pytest.CaptureFixture[str]) -> None:
-    code = main(["demo", "scara", "--algorithm", "mca2", "--target", "0.9", "0.3", "-0.1", "0", "0", "0.4"])
+    code = main(
+        ["demo", "scara", "--no-viewer", "--algorithm", "mca2", "--target", "0.9", "0.3", "-0.1", "0", "0", "0.4"]
+    )
     out = capsys.readouterr().out
     assert "algorithm  mca2" in out
     assert code in (0, 1)

@@ -84,8 +84,12 @@ def test_server_dies_with_a_killed_parent() -> None:
 
 @linux_only
 def test_ctrl_c_on_the_demo_closes_the_server() -> None:
-    demo = subprocess.Popen([sys.executable, "-m", "pinrate.cli", "demo", "scara", "--speed", "0.2"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    demo = subprocess.Popen(
+        [sys.executable, "-m", "pinrate.cli", "demo", "scara", "--speed", "0.2"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         line = demo.stdout.readline()
         assert line.startswith("Meshcat viewer: http://127.0.0.1:"), line
@@ -128,8 +132,9 @@ def test_node_transforms_are_pinocchio_placements(scara_viewer) -> None:
     pin.updateGeometryPlacements(robot.model, data, robot.visual_model, geometry_data)
     assert len([name for name in transforms if name.startswith("pinrate/")]) == robot.visual_model.ngeoms
     for index, geometry in enumerate(robot.visual_model.geometryObjects):
-        np.testing.assert_allclose(transforms[f"pinrate/visuals/{geometry.name}"],
-                                   geometry_data.oMg[index].homogeneous, atol=1e-12)
+        np.testing.assert_allclose(
+            transforms[f"pinrate/visuals/{geometry.name}"], geometry_data.oMg[index].homogeneous, atol=1e-12
+        )
     np.testing.assert_allclose(transforms["markers/tcp"], robot.pose(q), atol=1e-12)
 
 
@@ -150,9 +155,25 @@ def test_play_records_frames_and_writes_html(scara_viewer, tmp_path) -> None:
 
 def test_demo_records_html(tmp_path) -> None:
     out = tmp_path / "demo.html"
-    result = subprocess.run([sys.executable, "-m", "pinrate.cli", "demo", "planar_polar", "--speed", "1000",
-                             "--targets", "2", "--record", str(out)], capture_output=True, text=True, timeout=120,
-                            check=False)
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pinrate.cli",
+            "demo",
+            "planar_polar",
+            "--speed",
+            "1000",
+            "--targets",
+            "2",
+            "--record",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert result.returncode == 0, result.stderr[-2000:]
     assert "segment 1/2" in result.stdout and "segment 2/2" in result.stdout
     assert out.stat().st_size > 10_000
