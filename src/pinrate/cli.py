@@ -13,7 +13,7 @@ import pinocchio as pin
 
 from .algorithms import ALGORITHMS
 from .catalog import EXAMPLE_ROBOTS, example_robot_data_share
-from .errors import PinrateError
+from .errors import InputError, PinrateError
 from .partition import Partition
 from .robot import Robot, load
 from .robots import ROBOT_NAMES
@@ -144,6 +144,64 @@ def _demo(args: argparse.Namespace) -> int:
             viewer.close()
 
 
+def _partition_from_args(args: argparse.Namespace, robot: Robot) -> Partition:
+    automatic = Partition.auto(robot)
+    if args.arm is None and args.wrist is None and args.linear is None and args.angular is None:
+        return automatic
+
+    def names(text: str | None, default: tuple[str, ...]) -> tuple[str, ...]:
+        return default if text is None else tuple(name for name in text.split(",") if name)
+
+    return Partition(
+        names(args.arm, automatic.arm),
+        names(args.wrist, automatic.wrist),
+        linear=automatic.linear if args.linear is None else args.linear,
+        angular=automatic.angular if args.angular is None else args.angular,
+    )
+
+
+def _analyze(args: argparse.Namespace) -> int:
+    from . import analysis, robots
+
+    robot = load(args.robot, tip=args.tip, sensor=args.sensor)
+    partition = _partition_from_args(args, robot)
+    started = time.perf_counter()
+    report = analysis.analyze(
+        robot,
+        samples=args.samples,
+        partition=partition,
+        rng=args.seed,
+        map_joints=args.joints,
+        points=args.points,
+        workers=args.workers,
+        scheduler=args.scheduler,
+    )
+    if args.sweep:
+        parameter, low, high = analysis.parse_sweep(args.sweep)
+        if args.robot not in robots.ROBOT_NAMES:
+            raise InputError(
+                f"--sweep needs one of the papers' parametric robots ({', '.join(robots.ROBOT_NAMES)}); "
+                "for another robot call pinrate.analysis.sweep with a factory"
+            )
+        if parameter not in robots.parameters(args.robot):
+            raise InputError(
+                f"{args.robot} has no parameter {parameter!r}; its parameters: "
+                f"{', '.join(robots.parameters(args.robot))}"
+            )
+
+        def factory(value: float) -> Robot:
+            return robots.build(args.robot, tip=args.tip, sensor=args.sensor, **{parameter: value})
+
+        report.sweep = analysis.sweep(factory, parameter, low, high, samples=max(1000, args.samples // 25))
+    path = analysis.write_report(report, args.out)
+    print(report.markdown(), end="")
+    print(
+        f"\nwritten: {path} and {', '.join(p.name for p in report.files.values())} "
+        f"({time.perf_counter() - started:.1f} s)"
+    )
+    return 0
+
+
 def _paper(_: argparse.Namespace) -> int:
     from .paper_results import markdown, results
 
@@ -161,6 +219,24 @@ def build_parser() -> argparse.ArgumentParser:
 
     paper = commands.add_parser("paper", help="recompute every result of the two papers (Markdown table)")
     paper.set_defaults(run=_paper)
+
+    analyze = commands.add_parser("analyze", help="where do MCA1/2/3 converge? report with region maps")
+    analyze.add_argument("robot", help="a name from `pinrate list` or a URDF path")
+    analyze.add_argument("--tip", help="TCP frame")
+    analyze.add_argument("--sensor", help="frame the twist is expressed in")
+    analyze.add_argument("--arm", help="comma-separated arm joints (default: the automatic partition)")
+    analyze.add_argument("--wrist", help="comma-separated wrist joints")
+    analyze.add_argument("--linear", help="controlled linear axes, e.g. xy")
+    analyze.add_argument("--angular", help="controlled angular axes, e.g. z")
+    analyze.add_argument("--samples", type=int, default=100_000, help="configurations for the work-volume share")
+    analyze.add_argument("--joints", nargs=2, metavar=("X", "Y"), help="the region map's two joints")
+    analyze.add_argument("--points", type=int, default=121, help="region map grid points per joint")
+    analyze.add_argument("--sweep", metavar="PARAM=LO:HI", help="sweep a parameter of a papers' robot")
+    analyze.add_argument("--out", default="analysis", help="folder for report.md and the PNGs")
+    analyze.add_argument("--workers", type=int, default=1, help="processes on this machine")
+    analyze.add_argument("--scheduler", help="a Dask scheduler address (needs pinrate[dask])")
+    analyze.add_argument("--seed", type=int, default=0)
+    analyze.set_defaults(run=_analyze)
 
     demo = commands.add_parser("demo", help="servo a robot from home to a target and summarise")
     demo.add_argument("robot", help="a name from `pinrate list` or a URDF path")

@@ -17,10 +17,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .algorithms import SINGULAR_RATIO, inverse
+from . import batched
+from .algorithms import inverse
 from .errors import InputError, SingularBlockError
+from .parallel import map_chunks, robot_from_spec
 from .partition import Partition
-from .robot import RngLike, Robot
+from .robot import RngLike, Robot, RobotSpec
 
 _Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 
@@ -70,29 +72,13 @@ def convergence(robot: Robot, q: object, *, partition: Partition | None = None) 
         ) from None
 
 
-def _batched_inverse(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Inverses of a stack (N, r, c) and a mask of the singular square ones (set to 0)."""
-    count, rows, cols = M.shape
-    if rows == 0 or cols == 0:
-        return np.zeros((count, cols, rows)), np.zeros(count, dtype=bool)
-    if rows != cols:
-        return np.linalg.pinv(M, rcond=1e-10), np.zeros(count, dtype=bool)
-    scale = np.prod(np.linalg.norm(M, axis=1), axis=-1)
-    singular = ~(np.abs(np.linalg.det(M)) > SINGULAR_RATIO * scale)
-    safe = np.where(singular[:, None, None], np.eye(rows), M)
-    inverses = np.linalg.inv(safe)
-    inverses[singular] = 0.0
-    return inverses, singular
-
-
 def spectral_radii(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> np.ndarray:
     """ρ of the smaller of G and H for stacks of blocks (N, ., .); inf where A or W is singular."""
-    A_inv, singular_A = _batched_inverse(A)
-    W_inv, singular_W = _batched_inverse(W)
+    A_inv, singular_A = batched.inverse(A)
+    W_inv, singular_W = batched.inverse(W)
     P = U @ A_inv
     Q = B @ W_inv
-    smaller = P @ Q if P.shape[1] <= Q.shape[1] else Q @ P
-    radii = np.zeros(A.shape[0]) if smaller.shape[1] == 0 else np.abs(np.linalg.eigvals(smaller)).max(axis=1)
+    radii = batched.spectral_radius(P @ Q if P.shape[1] <= Q.shape[1] else Q @ P)
     radii[singular_A | singular_W] = np.inf
     return radii
 
@@ -130,30 +116,89 @@ def wilson_interval(successes: int, trials: int, z: float = _Z95) -> tuple[float
 def partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Partition) -> np.ndarray:
     """Sensor-frame Jacobians restricted to the partition, a stack (N, m + k, n)."""
     index = partition.resolve(robot)
-    out = np.empty((configurations.shape[0], index.rows.size, index.columns.size))
-    rows, columns = np.ix_(index.rows, index.columns)
+    full = np.empty((configurations.shape[0], 6, robot.nv))
+    jacobian = robot.sensor_jacobian
     for i, q in enumerate(configurations):
-        out[i] = robot.kinematics(q)[0][rows, columns]
-    return out
+        full[i] = jacobian(q)
+    if index.all_rows and index.all_columns:
+        return full
+    return full[:, index.rows][:, :, index.columns]
+
+
+CHUNK = 20_000
+"""Configurations per chunk of work in :func:`sample_convergence`."""
+
+
+def radii_of_configurations(spec: RobotSpec, partition: Partition, configurations: np.ndarray) -> np.ndarray:
+    """ρ at each configuration (N, nq): one chunk of work, runnable in any process."""
+    return radii_for_robot(robot_from_spec(spec), partition, configurations)
+
+
+def radii_for_robot(robot: Robot, partition: Partition, configurations: np.ndarray) -> np.ndarray:
+    """ρ at each configuration (N, nq) of ``robot``: Pinocchio Jacobians, batched block algebra."""
+    index = partition.resolve(robot)
+    jacobians = partition_jacobians(robot, configurations, partition)
+    m, n_arm = index.m, index.arm_columns.size
+    return spectral_radii(
+        jacobians[:, :m, :n_arm], jacobians[:, :m, n_arm:], jacobians[:, m:, :n_arm], jacobians[:, m:, n_arm:]
+    )
+
+
+def spectral_radius_at(
+    robot: Robot,
+    configurations: np.ndarray,
+    *,
+    partition: Partition | None = None,
+    workers: int = 1,
+    scheduler: object = None,
+    progress: bool | None = None,
+) -> np.ndarray:
+    """ρ of the smaller of G and H at each configuration (N, nq), in chunks, in parallel if asked."""
+    partition = Partition.auto(robot) if partition is None else partition
+    partition.resolve(robot)  # unknown joints fail here, not in a worker
+    configurations = np.asarray(configurations, dtype=float)
+    if configurations.ndim != 2 or configurations.shape[1] != robot.nq:
+        raise InputError(f"configurations must have shape (N, {robot.nq}), got {configurations.shape}")
+    if workers == 1 and scheduler is None and configurations.shape[0] <= CHUNK:
+        return radii_for_robot(robot, partition, configurations)
+    chunks = [configurations[start : start + CHUNK] for start in range(0, configurations.shape[0], CHUNK)]
+    parts = map_chunks(
+        radii_of_configurations,
+        chunks,
+        robot.spec(),
+        partition,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        description=f"{robot.name}: rho",
+    )
+    return np.concatenate(parts) if parts else np.zeros(0)
 
 
 def sample_convergence(
-    robot: Robot, samples: int, *, partition: Partition | None = None, rng: RngLike = None
+    robot: Robot,
+    samples: int,
+    *,
+    partition: Partition | None = None,
+    rng: RngLike = None,
+    workers: int = 1,
+    scheduler: object = None,
+    progress: bool | None = None,
 ) -> ConvergenceSample:
     """The Theorem's test at ``samples`` configurations drawn uniformly in the joint limits.
 
     Only the partition's joints are drawn (others stay at neutral; joints without limits in
     [-pi, pi]). Jacobians come from Pinocchio one configuration at a time; the block algebra
-    and the eigenvalues are batched in numpy.
+    and the eigenvalues are batched in closed form (:mod:`pinrate.batched`). ``workers``
+    spreads the chunks over processes, ``scheduler`` over a Dask cluster (the result is
+    the same either way: configurations are drawn here first). ``progress``: a bar (None:
+    on a terminal only).
     """
     if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or samples < 1:
         raise InputError(f"samples must be a positive integer, got {samples!r}")
     partition = Partition.auto(robot) if partition is None else partition
-    index = partition.resolve(robot)
     configurations = robot.sample_configurations(int(samples), rng, joints=partition.joints)
-    jacobians = partition_jacobians(robot, configurations, partition)
-    m, n_arm = index.m, index.arm_columns.size
-    radii = spectral_radii(
-        jacobians[:, :m, :n_arm], jacobians[:, :m, n_arm:], jacobians[:, m:, :n_arm], jacobians[:, m:, n_arm:]
+    radii = spectral_radius_at(
+        robot, configurations, partition=partition, workers=workers, scheduler=scheduler, progress=progress
     )
     return ConvergenceSample(q=configurations, spectral_radius=radii, partition=partition)

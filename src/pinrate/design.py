@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .convergence import partition_jacobians, spectral_radii
+from .convergence import spectral_radius_at
 from .errors import InputError
 from .partition import Partition
 from .robot import Robot
@@ -100,6 +100,9 @@ def grid_check(
     points: int = 61,
     joints: Sequence[str] | None = None,
     max_configurations: int = 2_000_000,
+    workers: int = 1,
+    scheduler: object = None,
+    progress: bool | None = None,
 ) -> GridCheck:
     """ρ at every point of a regular grid (``points`` per joint, limits included) over ``joints``.
 
@@ -122,11 +125,8 @@ def grid_check(
     configurations = np.tile(robot.home(), (count, 1))
     for joint, values in zip(joints, np.array(list(itertools.product(*axes))).T if joints else [], strict=False):
         _set_joint(robot, configurations, joint, values)
-    index = partition.resolve(robot)
-    jacobians = partition_jacobians(robot, configurations, partition)
-    m, n_arm = index.m, index.arm_columns.size
-    radii = spectral_radii(
-        jacobians[:, :m, :n_arm], jacobians[:, :m, n_arm:], jacobians[:, m:, :n_arm], jacobians[:, m:, n_arm:]
+    radii = spectral_radius_at(
+        robot, configurations, partition=partition, workers=workers, scheduler=scheduler, progress=progress
     )
     return GridCheck(joints=joints, q=configurations, spectral_radius=radii)
 

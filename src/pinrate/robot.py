@@ -21,13 +21,14 @@ import os
 import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from .catalog import EXAMPLE_ROBOTS, CatalogEntry, example_robot_data_share, example_robot_path
-from .errors import FrameError, InputError, LoadError, choices_hint
+from .errors import FrameError, InputError, LoadError, PinrateError, choices_hint
 
 logger = logging.getLogger("pinrate")
 
@@ -50,6 +51,19 @@ def as_rng(rng: RngLike) -> np.random.Generator:
     if rng is None or isinstance(rng, int | np.integer):
         return np.random.default_rng(rng)
     raise InputError(f"rng must be a numpy Generator, an int seed or None, not {type(rng).__name__}")
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """What a worker needs to rebuild a robot's kinematics: URDF text, tip, sensor, name."""
+
+    urdf_text: str
+    tip: str
+    sensor: str
+    name: str
+
+    def build(self) -> Robot:
+        return robot_from_urdf(self.urdf_text, label=self.name, tip=self.tip, sensor=self.sensor, name=self.name)
 
 
 class Robot:
@@ -133,6 +147,12 @@ class Robot:
         """The moving joints that support the tip, base to tip."""
         parent = self.model.frames[self.tip_id].parentJoint
         return tuple(self.model.names[j] for j in self.model.supports[parent] if j > 0 and self.model.joints[j].nv > 0)
+
+    def spec(self) -> RobotSpec:
+        """A picklable recipe of this robot's kinematics (for worker processes and Dask)."""
+        if self._urdf_text is None:
+            raise PinrateError(f"robot {self.name!r} was built from a model, not URDF text: it has no spec")
+        return RobotSpec(urdf_text=self._urdf_text, tip=self.tip, sensor=self.sensor, name=self.name)
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, nq={self.nq}, nv={self.nv}, tip={self.tip!r}, sensor={self.sensor!r})"
@@ -259,7 +279,7 @@ class Robot:
 
     def _load_visuals(self) -> pin.GeometryModel:
         try:
-            if self._urdf_text is not None:
+            if self._urdf_path is None and self._urdf_text is not None:
                 return pin.buildGeomFromUrdfString(
                     self.model, self._urdf_text, pin.GeometryType.VISUAL, package_dirs=self._package_dirs
                 )
@@ -399,7 +419,7 @@ def robot_from_urdf(
         sensor=sensor,
         name=robot_name,
         urdf_path=urdf_path,
-        urdf_text=text if urdf_path is None else None,
+        urdf_text=text,
         package_dirs=package_dirs,
         reference_configurations=references,
     )
