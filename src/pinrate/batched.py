@@ -85,6 +85,10 @@ def spectral_radius(M: np.ndarray) -> np.ndarray:
     shift = -p2 / 3  # λ = t + shift: t³ + p t + q = 0
     p = p1 - p2 * p2 / 3
     q = 2 * p2**3 / 27 - p2 * p1 / 3 + p0
+    # Cancellation leaves rounding noise where p or q is exactly 0 (a triple root, c I):
+    # snap it, or the cube roots of the noise cost ~eps^(1/3) of accuracy.
+    p = np.where(np.abs(p) <= 1e-12 * (p2 * p2 / 3 + np.abs(p1)), 0.0, p)
+    q = np.where(np.abs(q) <= 1e-12 * (np.abs(2 * p2**3 / 27) + np.abs(p2 * p1 / 3) + np.abs(p0)), 0.0, q)
     discriminant = (q / 2) ** 2 + (p / 3) ** 3
     one_real = discriminant > 0
     # Cardano (one real root, a complex pair).

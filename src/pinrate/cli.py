@@ -165,18 +165,8 @@ def _analyze(args: argparse.Namespace) -> int:
 
     robot = load(args.robot, tip=args.tip, sensor=args.sensor)
     partition = _partition_from_args(args, robot)
-    started = time.perf_counter()
-    report = analysis.analyze(
-        robot,
-        samples=args.samples,
-        partition=partition,
-        rng=args.seed,
-        map_joints=args.joints,
-        points=args.points,
-        workers=args.workers,
-        scheduler=args.scheduler,
-    )
-    if args.sweep:
+    factory = None
+    if args.sweep:  # checked before the long part of the work
         parameter, low, high = analysis.parse_sweep(args.sweep)
         if args.robot not in robots.ROBOT_NAMES:
             raise InputError(
@@ -192,6 +182,18 @@ def _analyze(args: argparse.Namespace) -> int:
         def factory(value: float) -> Robot:
             return robots.build(args.robot, tip=args.tip, sensor=args.sensor, **{parameter: value})
 
+    started = time.perf_counter()
+    report = analysis.analyze(
+        robot,
+        samples=args.samples,
+        partition=partition,
+        rng=args.seed,
+        map_joints=args.joints,
+        points=args.points,
+        workers=args.workers,
+        scheduler=args.scheduler,
+    )
+    if factory is not None:
         report.sweep = analysis.sweep(factory, parameter, low, high, samples=max(1000, args.samples // 25))
     path = analysis.write_report(report, args.out)
     print(report.markdown(), end="")

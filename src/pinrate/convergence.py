@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from . import batched
 from .algorithms import inverse
@@ -116,10 +117,14 @@ def wilson_interval(successes: int, trials: int, z: float = _Z95) -> tuple[float
 def partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Partition) -> np.ndarray:
     """Sensor-frame Jacobians restricted to the partition, a stack (N, m + k, n)."""
     index = partition.resolve(robot)
-    full = np.empty((configurations.shape[0], 6, robot.nv))
-    jacobian = robot.sensor_jacobian
-    for i, q in enumerate(configurations):
-        full[i] = jacobian(q)
+    if configurations.shape[0] == 0:
+        return np.zeros((0, index.rows.size, index.columns.size))
+    if robot.sensor_id == robot.tip_id:
+        # The hot loop: one Pinocchio call per q, nothing else (a list, stacked once).
+        compute, model, data, tip, local = pin.computeFrameJacobian, robot.model, robot.data, robot.tip_id, pin.LOCAL
+        full = np.stack([compute(model, data, q, tip, local) for q in list(configurations)])
+    else:
+        full = np.stack([robot.sensor_jacobian(q) for q in list(configurations)])
     if index.all_rows and index.all_columns:
         return full
     return full[:, index.rows][:, :, index.columns]
