@@ -248,13 +248,9 @@ def joint_rates(
     q = robot.check_q(q)
     partition = Partition.auto(robot) if partition is None else partition
     index = partition.resolve(robot)
-    twist = check_vector(twist, index.rows.size, f"twist (partition {partition.linear!r}+{partition.angular!r})")
+    twist = check_vector(twist, index.rows.size, "twist (linear then angular components of the partition)")
     jacobian = robot.sensor_jacobian(q)
     try:
         return partition_rates(jacobian, index, twist, algorithm)
     except SingularBlockError as error:
-        raise SingularBlockError(
-            f"{error} for robot {robot.name!r} with {algorithm} at q = {np.array2string(q, precision=4)}",
-            block=error.block,
-            q=q,
-        ) from None
+        raise error.at(robot.name, q, f" with {algorithm}") from None

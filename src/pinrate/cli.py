@@ -1,4 +1,4 @@
-"""The ``pinrate`` command line: ``pinrate list`` and ``pinrate demo ROBOT``."""
+"""The ``pinrate`` command line: ``list``, ``demo``, ``analyze`` and ``paper``."""
 
 from __future__ import annotations
 
@@ -49,12 +49,16 @@ def demo_target(robot: Robot, partition: Partition, seed: int | None) -> tuple[n
     return q_target, robot.pose(q_target)
 
 
+def radius_range(trajectory: Trajectory) -> str:
+    """'min .. max' of ρ along a run, and whether a block was singular somewhere."""
+    finite = trajectory.spectral_radius[np.isfinite(trajectory.spectral_radius)]
+    text = f"{finite.min():.3f} .. {finite.max():.3f}" if finite.size else "undefined"
+    return text if finite.size == trajectory.spectral_radius.size else text + " (singular at some steps)"
+
+
 def summary(robot: Robot, trajectory: Trajectory) -> str:
     """A short, readable account of a servo run."""
-    finite = trajectory.spectral_radius[np.isfinite(trajectory.spectral_radius)]
-    radius = f"{finite.min():.3f} .. {finite.max():.3f}" if finite.size else "undefined"
-    if finite.size < trajectory.spectral_radius.size:
-        radius += " (singular at some steps)"
+    radius = radius_range(trajectory)
     lines = [
         f"robot      {robot.name}   tip {robot.tip}   sensor {robot.sensor}",
         "partition  " + str(trajectory.partition).replace("\n", "\n           "),
@@ -70,8 +74,7 @@ def summary(robot: Robot, trajectory: Trajectory) -> str:
 
 def status_line(index: int, count: int, trajectory: Trajectory) -> str:
     """One console line per servo segment."""
-    finite = trajectory.spectral_radius[np.isfinite(trajectory.spectral_radius)]
-    radius = f"{finite.min():.3f}..{finite.max():.3f}" if finite.size else "undefined"
+    radius = radius_range(trajectory)
     return (
         f"segment {index}/{count}  {trajectory.algorithm}  {trajectory.steps} steps  "
         f"{'converged' if trajectory.converged else 'NOT converged'}  "

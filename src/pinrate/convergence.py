@@ -66,11 +66,7 @@ def convergence(robot: Robot, q: object, *, partition: Partition | None = None) 
     try:
         return convergence_from_blocks(*partition.blocks(robot, robot.kinematics(q)[0]))
     except SingularBlockError as error:
-        raise SingularBlockError(
-            f"{error} for robot {robot.name!r} at q = {np.array2string(q, precision=4)}: G and H are undefined",
-            block=error.block,
-            q=q,
-        ) from None
+        raise error.at(robot.name, q, " (G and H are undefined there)") from None
 
 
 def spectral_radii(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> np.ndarray:

@@ -38,6 +38,13 @@ class SingularBlockError(PinrateError):
         self.block = block
         self.q = q
 
+    def at(self, robot_name: str, q: object, detail: str = "") -> SingularBlockError:
+        """The same error, its message completed with the robot and the configuration."""
+        import numpy as np
+
+        where = np.array2string(np.asarray(q), precision=4)
+        return SingularBlockError(f"{self} for robot {robot_name!r}{detail} at q = {where}", block=self.block, q=q)
+
 
 def choices_hint(name: str, valid: Iterable[str], *, limit: int = 40) -> str:
     """A ' Did you mean …? Known: …' suffix listing the closest or all valid names."""

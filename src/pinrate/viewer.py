@@ -268,13 +268,4 @@ class Viewer:
         self.close()
 
 
-def spectral_radius_summary(trajectory: Trajectory) -> str:
-    """'min .. max' of the finite spectral radii, for status lines."""
-    finite = trajectory.spectral_radius[np.isfinite(trajectory.spectral_radius)]
-    if not finite.size:
-        return "undefined"
-    text = f"{finite.min():.3f} .. {finite.max():.3f}"
-    return text if finite.size == trajectory.spectral_radius.size else text + " (singular somewhere)"
-
-
-__all__ = ["MeshcatServer", "Viewer", "ViewerError", "path_colours", "spectral_radius_summary", "triad"]
+__all__ = ["MeshcatServer", "Viewer", "ViewerError", "path_colours", "triad"]
