@@ -44,3 +44,11 @@ def test_demo_bad_robot_is_a_clear_error(capsys: pytest.CaptureFixture[str]) -> 
 def test_console_script_runs() -> None:
     result = subprocess.run([sys.executable, "-m", "pinrate.cli", "list"], capture_output=True, text=True, check=False)
     assert result.returncode == 0 and "ur5" in result.stdout
+
+
+def test_demo_reports_an_automatic_tip(capsys: pytest.CaptureFixture[str]) -> None:
+    from conftest import DATA
+
+    main(["demo", str(DATA / "mixed_joints.urdf"), "--no-viewer", "--max-steps", "5"])
+    out = capsys.readouterr().out
+    assert "tip        tool (chosen: the deepest frame at the end of the longest chain" in out

@@ -90,8 +90,15 @@ def _targets(args: argparse.Namespace, robot: Robot, partition: Partition) -> li
     return [demo_target(robot, partition, args.seed + k)[1] for k in range(args.targets)]
 
 
-def _demo(args: argparse.Namespace) -> int:
+def _load(args: argparse.Namespace) -> Robot:
     robot = load(args.robot, tip=args.tip, sensor=args.sensor)
+    if robot.tip_choice != "given":
+        print(f"tip        {robot.tip} ({robot.tip_choice}; --tip to choose another)")
+    return robot
+
+
+def _demo(args: argparse.Namespace) -> int:
+    robot = _load(args)
     partition = Partition.auto(robot)
     targets = _targets(args, robot, partition)
     viewer = None
@@ -166,7 +173,7 @@ def _partition_from_args(args: argparse.Namespace, robot: Robot) -> Partition:
 def _analyze(args: argparse.Namespace) -> int:
     from . import analysis, robots
 
-    robot = load(args.robot, tip=args.tip, sensor=args.sensor)
+    robot = _load(args)
     partition = _partition_from_args(args, robot)
     factory = None
     if args.sweep:  # checked before the long part of the work

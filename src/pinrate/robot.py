@@ -73,6 +73,7 @@ class Robot:
         model, data: the Pinocchio model and its data (the data is scratch space reused by
             every call, so a Robot is not thread-safe; use one Robot per thread).
         tip: name of the frame whose origin is the TCP.
+        tip_choice: how the tip was picked ("given", or how pinrate chose it).
         sensor: name of the frame whose axes twists are expressed in.
         joint_names: the moving joints, in velocity-vector order.
         reference_configurations: named configurations (from the SRDF, plus ``"home"``).
@@ -100,13 +101,11 @@ class Robot:
 
         if tip is None:
             self.tip_id = default_tip_frame(model)
-            logger.info(
-                "%s: no tip given, chose frame %r (end of the longest chain)",
-                self.name,
-                model.frames[self.tip_id].name,
-            )
+            self.tip_choice = "chosen: the deepest frame at the end of the longest chain of moving joints"
+            logger.info("%s: no tip given, %s: %r", self.name, self.tip_choice, model.frames[self.tip_id].name)
         else:
             self.tip_id = resolve_frame(model, tip, role="tip", robot=self.name)
+            self.tip_choice = "given"
         self.tip = model.frames[self.tip_id].name
         self.sensor_id = self.tip_id if sensor is None else resolve_frame(model, sensor, role="sensor", robot=self.name)
         self.sensor = model.frames[self.sensor_id].name
