@@ -196,6 +196,7 @@ def sweep(
     points: int = 61,
     rng: int = 0,
     tolerance: float = 1e-5,
+    progress: bool | None = None,
 ) -> Sweep:
     """Fraction with ρ < 1 at ``steps`` values in [low, high], and the convergence limit.
 
@@ -205,9 +206,12 @@ def sweep(
     """
     if not (math.isfinite(low) and math.isfinite(high)) or low >= high:
         raise InputError(f"sweep range {parameter}={low}:{high} must have low < high")
+    from tqdm.auto import tqdm
+
     values = np.linspace(low, high, steps)
     fractions, lows, highs, worst = [], [], [], []
-    for value in values:
+    for value in tqdm(values, desc=f"sweep {parameter}", disable=None if progress is None else not progress,
+                      leave=False):
         robot = factory(float(value))
         sample = sample_convergence(robot, samples, rng=rng)
         count = int(np.sum(sample.spectral_radius < 1))
