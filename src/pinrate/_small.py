@@ -172,7 +172,9 @@ def inverse(M: Matrix, block: str) -> Matrix:
         (a, b, c), (d, e, f), (g, h, i) = M
         c0, c1, c2 = e * i - f * h, f * g - d * i, d * h - e * g
         det = a * c0 + b * c1 + c * c2
-        _singular(det, M, block)
+        scale_squared = (a * a + d * d + g * g) * (b * b + e * e + h * h) * (c * c + f * f + i * i)
+        if not det * det > _RATIO_SQUARED * scale_squared:
+            _singular(det, M, block)
         s = 1.0 / det
         return [
             [c0 * s, (c * h - b * i) * s, (b * f - c * e) * s],
@@ -191,6 +193,14 @@ def inverse(M: Matrix, block: str) -> Matrix:
 
 
 def _matmul(X: Matrix, Y: Matrix) -> Matrix:
+    if len(X) == 3 and len(Y) == 3 and len(Y[0]) == 3 and len(X[0]) == 3:
+        (a, b, c), (d, e, f), (g, h, i) = X
+        (p, q, r), (s, t, u), (v, w, x) = Y
+        return [
+            [a * p + b * s + c * v, a * q + b * t + c * w, a * r + b * u + c * x],
+            [d * p + e * s + f * v, d * q + e * t + f * w, d * r + e * u + f * x],
+            [g * p + h * s + i * v, g * q + h * t + i * w, g * r + h * u + i * x],
+        ]
     columns = list(zip(*Y, strict=True)) if Y else []
     return [[_dot(row, column) for column in columns] for row in X]
 
