@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: demo test lint bench urdf docs clean
+.PHONY: demo test lint typecheck bench urdf docs clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +22,10 @@ test: $(VENV)/.installed
 
 lint: $(VENV)/.installed
 	$(BIN)/ruff check src tests examples benchmarks
+
+typecheck: $(VENV)/.installed
+	$(BIN)/python -m pip install --quiet mypy
+	$(BIN)/mypy src/pinrate
 
 bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/step.py

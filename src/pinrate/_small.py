@@ -14,6 +14,7 @@ from __future__ import annotations
 import cmath
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -129,7 +130,7 @@ def eligible(m: int, n_arm: int, k: int, n_wrist: int) -> bool:
     return m == n_arm and k == n_wrist and 0 < m <= 3 and k <= 3
 
 
-Selector = tuple[slice, slice] | tuple[np.ndarray, np.ndarray]
+Selector = tuple[Any, Any]  # two slices, or np.ix_ index arrays
 
 
 def selector(rows: list[int], columns: list[int]) -> Selector:
@@ -145,13 +146,14 @@ def selector(rows: list[int], columns: list[int]) -> Selector:
     row_slice, column_slice = as_slice(rows), as_slice(columns)
     if row_slice is not None and column_slice is not None:
         return (row_slice, column_slice)
-    return np.ix_(rows, columns)
+    row_index, column_index = np.ix_(rows, columns)
+    return (row_index, column_index)
 
 
 Blocks = tuple[Matrix, Matrix, Matrix, Matrix]
 
 
-def blocks(jacobian: np.ndarray, selectors: tuple[Selector, Selector, Selector, Selector]) -> Blocks:
+def blocks(jacobian: np.ndarray, selectors: tuple[Selector, ...]) -> Blocks:
     """(A, B, U, W) of eq. 19 as nested lists, from the sensor-frame Jacobian (6, nv)."""
     a, b, u, w = selectors
     return jacobian[a].tolist(), jacobian[b].tolist(), jacobian[u].tolist(), jacobian[w].tolist()

@@ -84,13 +84,10 @@ def block_structure(
     configurations = np.vstack(
         [robot.home()[None, :], robot.sample_configurations(samples, rng, joints=partition.joints)]
     )
-    magnitude = None
-    for q in configurations:
-        blocks = partition.blocks(robot, robot.sensor_jacobian(q))
-        current = [np.abs(block) for block in blocks]
-        magnitude = (
-            current if magnitude is None else [np.maximum(a, b) for a, b in zip(magnitude, current, strict=True)]
-        )
+    magnitude = [np.abs(block) for block in partition.blocks(robot, robot.sensor_jacobian(configurations[0]))]
+    for q in configurations[1:]:
+        current = partition.blocks(robot, robot.sensor_jacobian(q))
+        magnitude = [np.maximum(a, np.abs(b)) for a, b in zip(magnitude, current, strict=True)]
     scale = 1.0 + max((float(m.max()) for m in magnitude if m.size), default=0.0)
     return BlockStructure({name: m <= _ZERO * scale for name, m in zip("ABUW", magnitude, strict=True)}, partition)
 
@@ -210,8 +207,9 @@ def sweep(
 
     values = np.linspace(low, high, steps)
     fractions, lows, highs, worst = [], [], [], []
-    for value in tqdm(values, desc=f"sweep {parameter}", disable=None if progress is None else not progress,
-                      leave=False):
+    for value in tqdm(
+        values, desc=f"sweep {parameter}", disable=None if progress is None else not progress, leave=False
+    ):
         robot = factory(float(value))
         sample = sample_convergence(robot, samples, rng=rng)
         count = int(np.sum(sample.spectral_radius < 1))

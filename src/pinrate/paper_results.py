@@ -268,7 +268,7 @@ BARKER_ES, BARKER_WE = 0.4318, 0.4331
 
 def barker_det_deviation(count: int = 300, **lengths: float) -> float:
     """max |det A - eq. D9| / (1 + |eq. D9|), with (S2 ES + F5)(SAL3 WE S3 + A3 C3) ES."""
-    robot = robots.barker_arm(**lengths)
+    robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
     parameters = robots.parameters("barker_arm") | lengths
     es, we, a3 = parameters["es"], parameters["we"], parameters["a3"]
     sal3 = math.sin(parameters["alpha3"])
@@ -309,7 +309,7 @@ def barker_singular(q: np.ndarray) -> bool:
 
 def barker_wrist_deviation(count: int = 200, **lengths: float) -> float:
     """max residual of eq. 49-51 for pinrate's wrist rates (D1..D5 of eq. 52-56)."""
-    robot = robots.barker_arm(**lengths)
+    robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
     alpha3 = (robots.parameters("barker_arm") | lengths)["alpha3"]
     sal3, cal3 = math.sin(alpha3), math.cos(alpha3)
     generator = np.random.default_rng(9)

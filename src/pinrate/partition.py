@@ -180,13 +180,13 @@ def _names(value: object, what: str) -> tuple[str, ...]:
     if isinstance(value, str):
         return (value,)
     try:
-        names = tuple(value)  # type: ignore[arg-type]
+        names: tuple[object, ...] = tuple(value)  # type: ignore[call-overload, arg-type]
     except TypeError:
         raise InputError(f"partition {what} must be a sequence of joint names") from None
     for name in names:
         if not isinstance(name, str):
             raise InputError(f"partition {what} must hold joint names (str), got {name!r}")
-    return names
+    return tuple(str(name) for name in names)
 
 
 def _axes(value: object, what: str) -> str:

@@ -304,7 +304,7 @@ def check_vector(value: object, length: int, what: str, *, names: Sequence[str] 
     # sum of finite entries falls through to the entry-wise test.
     if not math.isfinite(array.sum()) and not np.isfinite(array).all():
         bad = np.flatnonzero(~np.isfinite(array))
-        where = ", ".join(f"{what}[{i}]" + (f" ({names[i]})" if names and names[i] else "") for i in bad)
+        where = ", ".join(f"{what}[{i}]" + (f" ({names[int(i)]})" if names and names[int(i)] else "") for i in bad)
         raise InputError(f"{what} contains NaN or inf at {where}")
     return array
 

@@ -69,7 +69,7 @@ def _rotation(axis: str, angle: float) -> np.ndarray:
     }[axis]
 
 
-def _fmt(values: Sequence[float]) -> str:
+def _fmt(values: Sequence[float] | np.ndarray) -> str:
     # Shortest round-trip repr: URDF angles keep full double precision.
     return " ".join(repr(0.0 if abs(v) < 1e-15 else float(v)) for v in values)
 
@@ -426,49 +426,49 @@ def build(name: str, *, tip: str | None = None, sensor: str | None = None, **len
     )
 
 
-def two_link_planar(**lengths: float) -> Robot:
+def two_link_planar(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """Two-link planar arm of Fig. 1 (eq. 5-12): l1, l2."""
-    return build("two_link_planar", **lengths)
+    return build("two_link_planar", tip=tip, sensor=sensor, **lengths)
 
 
-def cylindrical(**lengths: float) -> Robot:
+def cylindrical(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """Cylindrical arm theta1, d2, d3 (eq. 13): strokes d2_max, d3_max."""
-    return build("cylindrical", **lengths)
+    return build("cylindrical", tip=tip, sensor=sensor, **lengths)
 
 
-def spherical(**lengths: float) -> Robot:
+def spherical(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """Spherical arm of Fig. 2, theta1, theta2, d3 (eq. 14-16): stroke d3_max."""
-    return build("spherical", **lengths)
+    return build("spherical", tip=tip, sensor=sensor, **lengths)
 
 
-def cartesian(**lengths: float) -> Robot:
+def cartesian(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """Cartesian arm with a wrist whose three axes meet at the TCP (the ideal of §3): travel."""
-    return build("cartesian", **lengths)
+    return build("cartesian", tip=tip, sensor=sensor, **lengths)
 
 
-def planar_polar(**lengths: float) -> Robot:
+def planar_polar(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """Planar polar robot of Fig. 4 (eq. 55-58): l (default 0.2), stroke d2_min .. d2_max."""
-    return build("planar_polar", **lengths)
+    return build("planar_polar", tip=tip, sensor=sensor, **lengths)
 
 
-def scara(**lengths: float) -> Robot:
+def scara(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """SCARA of Fig. 7 (eq. 59-63): l1, l2, l3 (default 0.4 each; l3 the tool length)."""
-    return build("scara", **lengths)
+    return build("scara", tip=tip, sensor=sensor, **lengths)
 
 
-def hirata_arh300(**lengths: float) -> Robot:
+def hirata_arh300(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """Hirata ARH-300 SCARA (§5.2): l2 = 0.275, 25° <= theta2 <= 145°, tool length l3."""
-    return build("hirata_arh300", **lengths)
+    return build("hirata_arh300", tip=tip, sensor=sensor, **lengths)
 
 
-def spherical_6dof(**lengths: float) -> Robot:
+def spherical_6dof(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """Six-DOF spherical robot of Fig. 11 (eq. 70-73): tool length l beyond P, d3 range."""
-    return build("spherical_6dof", **lengths)
+    return build("spherical_6dof", tip=tip, sensor=sensor, **lengths)
 
 
-def barker_arm(**lengths: float) -> Robot:
+def barker_arm(*, tip: str | None = None, sensor: str | None = None, **lengths: float) -> Robot:
     """Barker's six-joint arm (appendix A): no, es, sn, we, hw, alpha3, a3, r3."""
-    return build("barker_arm", **lengths)
+    return build("barker_arm", tip=tip, sensor=sensor, **lengths)
 
 
 def write_urdfs(folder: str | os.PathLike[str]) -> list[Path]:

@@ -146,7 +146,7 @@ class Viewer:
             webbrowser.open(self.url, new=2)
 
     # ------------------------------------------------------------------ drawing
-    def set_camera(self, position: Sequence[float]) -> None:
+    def set_camera(self, position: Sequence[float] | np.ndarray) -> None:
         """Put the camera at ``position`` (world frame, Z up), looking at the origin.
 
         meshcat 0.3.2's camera helpers in Pinocchio fail (no ``set_cam_pos``), so this sets
@@ -189,7 +189,7 @@ class Viewer:
         self.set_frame("target", pose, length=0.12)
         self.meshcat["markers/target/ball"].set_object(g.Sphere(0.012), g.MeshLambertMaterial(color=TARGET_COLOUR))
 
-    def add_path(self, points: np.ndarray, spectral_radius: Sequence[float]) -> str:
+    def add_path(self, points: np.ndarray, spectral_radius: Sequence[float] | np.ndarray) -> str:
         """A polyline through ``points`` (N, 3), each segment coloured by ρ at its start."""
         points = np.asarray(points, dtype=np.float32)
         radius = np.asarray(spectral_radius, dtype=float)
