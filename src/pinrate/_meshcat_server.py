@@ -22,7 +22,7 @@ PARENT_CHECK_MS = 500
 class _BoundBridge(zmqserver.ZMQWebSocketBridge):
     """The Meshcat bridge with its web port bound to ``self.host`` only."""
 
-    def make_app(self):  # type: ignore[no-untyped-def]
+    def make_app(self):
         app = super().make_app()
         listen = app.listen
         host = self.host

@@ -159,7 +159,7 @@ def region_map(
     design._set_joint(robot, configurations, pair[0], grid_x.ravel())
     design._set_joint(robot, configurations, pair[1], grid_y.ravel())
     radii = spectral_radius_at(robot, configurations, partition=partition).reshape(points, points)
-    return RegionMap(joints=pair, x=x, y=y, spectral_radius=radii, base=base)  # type: ignore[arg-type]
+    return RegionMap(joints=pair, x=x, y=y, spectral_radius=radii, base=base)
 
 
 def tcp_positions(robot: Robot, configurations: np.ndarray) -> np.ndarray:

@@ -180,7 +180,7 @@ def _names(value: object, what: str) -> tuple[str, ...]:
     if isinstance(value, str):
         return (value,)
     try:
-        names: tuple[object, ...] = tuple(value)  # type: ignore[call-overload, arg-type]
+        names: tuple[object, ...] = tuple(value)  # type: ignore[arg-type]
     except TypeError:
         raise InputError(f"partition {what} must be a sequence of joint names") from None
     for name in names:
