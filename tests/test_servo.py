@@ -144,7 +144,18 @@ def test_bad_targets(ur5: pinrate.Robot, target: object, match: str) -> None:
         pinrate.servo(ur5, ur5.home(), target)
 
 
-@pytest.mark.parametrize(("keyword", "value"), [("dt", 0.0), ("gain", -1.0), ("tol", math.nan), ("max_steps", -1)])
+@pytest.mark.parametrize(
+    ("keyword", "value"),
+    [
+        ("dt", 0.0),
+        ("dt", math.inf),
+        ("gain", -1.0),
+        ("tol", math.nan),
+        ("max_steps", -1),
+        ("gain", True),
+        ("max_linear_speed", 0.0),
+    ],
+)
 def test_bad_settings(ur5: pinrate.Robot, keyword: str, value: float) -> None:
     with pytest.raises(pinrate.InputError, match=keyword):
         pinrate.servo(ur5, ur5.home(), ur5.pose(ur5.home()), **{keyword: value})

@@ -20,6 +20,7 @@ sufficient, and only Re λ < 1 is needed as gain dt -> 0.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -128,9 +129,17 @@ def _saturate(values: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
     return values, False
 
 
-def _positive(value: float, name: str) -> float:
-    if not ((isinstance(value, int | float) and math.isfinite(value)) or value == math.inf) or value <= 0:
-        raise InputError(f"{name} must be a positive number, got {value!r}")
+def _positive(value: float, name: str, *, allow_inf: bool = False) -> float:
+    """``value`` as a float > 0 (finite unless ``allow_inf``); InputError naming ``name`` otherwise."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, numbers.Real)
+        or math.isnan(value)
+        or value <= 0
+        or (value == math.inf and not allow_inf)
+    ):
+        bound = "a positive number (or inf)" if allow_inf else "a positive finite number"
+        raise InputError(f"{name} must be {bound}, got {value!r}")
     return float(value)
 
 
@@ -159,8 +168,8 @@ def servo(
     q = robot.check_q(q0)
     goal = as_pose(target)
     dt, gain, tol = _positive(dt, "dt"), _positive(gain, "gain"), _positive(tol, "tol")
-    max_linear_speed = _positive(max_linear_speed, "max_linear_speed")
-    max_angular_speed = _positive(max_angular_speed, "max_angular_speed")
+    max_linear_speed = _positive(max_linear_speed, "max_linear_speed", allow_inf=True)
+    max_angular_speed = _positive(max_angular_speed, "max_angular_speed", allow_inf=True)
     if isinstance(max_steps, bool) or not isinstance(max_steps, int | np.integer) or max_steps < 0:
         raise InputError(f"max_steps must be a non-negative integer, got {max_steps!r}")
     partition = Partition.auto(robot) if partition is None else partition
