@@ -356,18 +356,18 @@ def _read_urdf(path: Path) -> str:
         raise LoadError(f"URDF file not found: {path}")
     if not path.is_file():
         raise LoadError(f"URDF path is not a file: {path}")
-    text = path.read_text(encoding="utf-8", errors="replace")
-    _check_urdf_text(text, str(path))
-    return text
+    return path.read_text(encoding="utf-8", errors="replace")
 
 
-def _check_urdf_text(text: str, label: str) -> None:
+def _check_urdf_text(text: str, label: str) -> ET.Element:
+    """The URDF's root element; LoadError naming ``label`` for malformed XML or a non-URDF."""
     try:
         root = ET.fromstring(text)
     except ET.ParseError as error:
         raise LoadError(f"{label}: malformed XML ({error})") from None
     if root.tag != "robot":
         raise LoadError(f"{label}: not a URDF (root element is <{root.tag}>, expected <robot>)")
+    return root
 
 
 def _build_model(text: str, label: str) -> pin.Model:
@@ -392,7 +392,7 @@ def robot_from_urdf(
     name: str | None = None,
 ) -> Robot:
     """A Robot from URDF text: the common path of every way of loading."""
-    _check_urdf_text(text, label)
+    root = _check_urdf_text(text, label)
     model = _build_model(text, label)
     references: dict[str, np.ndarray] = {}
     if srdf_path is not None and srdf_path.is_file():
@@ -411,7 +411,7 @@ def robot_from_urdf(
         references["home"] = configuration
     if "home" in references:
         references["home"] = _into_limits(model, references["home"])
-    robot_name = name or ET.fromstring(text).get("name") or label
+    robot_name = name or root.get("name") or label
     return Robot(
         model,
         tip=tip,
