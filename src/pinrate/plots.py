@@ -36,10 +36,18 @@ def region_map_png(region: RegionMap, path: Path, *, title: str = "") -> Path:
     """ρ over two joints (log colour scale, 1 in the middle) with the ρ = 1 contour."""
     x, x_label = _axis(region.x, region.joints[0])
     y, y_label = _axis(region.y, region.joints[1])
-    radius = np.clip(np.where(np.isfinite(region.spectral_radius), region.spectral_radius, RHO_RANGE[1]), *RHO_RANGE)
+    singular = ~np.isfinite(region.spectral_radius)
+    radius = np.clip(np.where(singular, RHO_RANGE[1], region.spectral_radius), *RHO_RANGE)
     figure, axes = plt.subplots(figsize=(7, 5.5), dpi=110)
     image = axes.pcolormesh(x, y, radius, cmap=RHO_COLOURS, norm=LogNorm(*RHO_RANGE), shading="auto")
-    contour = axes.contour(x, y, radius, levels=[1.0], colors="black", linewidths=1.8)
+    # The ρ = 1 contour of the finite part only: a singular row would draw two spurious lines.
+    contour = axes.contour(x, y, np.ma.masked_where(singular, radius), levels=[1.0], colors="black", linewidths=1.8)
+    if singular.any():  # A or W not invertible: G is undefined there, drawn apart from large ρ
+        axes.pcolormesh(
+            x, y, np.ma.masked_where(~singular, np.ones_like(radius)), cmap="Greys", vmin=0, vmax=1.6, shading="auto"
+        )
+        axes.plot([], [], "s", color="0.45", label="A or W singular (G undefined)")
+        axes.legend(loc="upper right", fontsize=8)
     axes.clabel(contour, fmt={1.0: "ρ = 1"}, fontsize=9)
     colour_bar = figure.colorbar(image, ax=axes)
     colour_bar.set_label("spectral radius ρ of G (converges where < 1)")
