@@ -24,9 +24,12 @@ DEMO_SPREAD = 0.4
 
 
 def _list(_: argparse.Namespace) -> int:
+    from . import robots
+
     print("The papers' robots (pinrate.robots, urdf/):")
     for name in ROBOT_NAMES:
-        print(f"  {name}")
+        summary_line = (getattr(robots, name).__doc__ or "").strip().splitlines()[0]
+        print(f"  {name:<16} {summary_line}")
     available = example_robot_data_share() is not None
     note = "" if available else "  (example-robot-data not installed)"
     print(f"example-robot-data arms:{note}")
