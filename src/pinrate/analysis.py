@@ -116,10 +116,9 @@ def joint_sensitivity(robot: Robot, *, partition: Partition | None = None, rng: 
     bases = robot.sample_configurations(_SENSITIVITY_BASES, generator, joints=partition.joints)
     sensitivity = {}
     for joint in partition.joints:
-        lower, upper = design._joint_range(robot, joint)
-        values = np.linspace(lower, upper, _SENSITIVITY_STEPS)
+        values = np.linspace(*robot.joint_range(joint), _SENSITIVITY_STEPS)
         configurations = np.repeat(bases, _SENSITIVITY_STEPS, axis=0)
-        design._set_joint(robot, configurations, joint, np.tile(values, _SENSITIVITY_BASES))
+        robot.set_joint_values(configurations, joint, np.tile(values, _SENSITIVITY_BASES))
         radii = np.minimum(spectral_radius_at(robot, configurations, partition=partition), _RHO_CLIP)
         sensitivity[joint] = float(np.mean(np.std(radii.reshape(_SENSITIVITY_BASES, _SENSITIVITY_STEPS), axis=1)))
     return sensitivity
@@ -152,12 +151,12 @@ def region_map(
         if joint not in partition.joints:
             raise InputError(f"joint {joint!r} is not in the partition; choose from {', '.join(partition.joints)}")
     base = robot.home() if base is None else robot.check_q(base)
-    x = np.linspace(*design._joint_range(robot, pair[0]), points)
-    y = np.linspace(*design._joint_range(robot, pair[1]), points)
+    x = np.linspace(*robot.joint_range(pair[0]), points)
+    y = np.linspace(*robot.joint_range(pair[1]), points)
     configurations = np.tile(base, (points * points, 1))
     grid_x, grid_y = np.meshgrid(x, y)
-    design._set_joint(robot, configurations, pair[0], grid_x.ravel())
-    design._set_joint(robot, configurations, pair[1], grid_y.ravel())
+    robot.set_joint_values(configurations, pair[0], grid_x.ravel())
+    robot.set_joint_values(configurations, pair[1], grid_y.ravel())
     radii = spectral_radius_at(robot, configurations, partition=partition).reshape(points, points)
     return RegionMap(joints=pair, x=x, y=y, spectral_radius=radii, base=base)
 

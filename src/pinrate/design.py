@@ -14,7 +14,6 @@ robot, "l3 < 60 mm" for the Hirata ARH-300. Here the same questions for any robo
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -26,26 +25,6 @@ from .partition import Partition
 from .robot import Robot
 
 _DEPENDENCE_TOL = 1e-9
-
-
-def _joint_range(robot: Robot, joint: str) -> tuple[float, float]:
-    """The joint's limits, or [-pi, pi] where there are none (as sample_configurations)."""
-    joint_model = robot.model.joints[robot.joint_id(joint)]
-    lower, upper = robot.position_limits()
-    i = joint_model.idx_q
-    if joint_model.nq == 1 and math.isfinite(lower[i]) and math.isfinite(upper[i]) and upper[i] - lower[i] < 1e6:
-        return float(lower[i]), float(upper[i])
-    return -math.pi, math.pi
-
-
-def _set_joint(robot: Robot, q: np.ndarray, joint: str, values: np.ndarray) -> None:
-    """Write joint values (angles for continuous joints) into the configuration rows of q."""
-    joint_model = robot.model.joints[robot.joint_id(joint)]
-    i = joint_model.idx_q
-    if joint_model.nq == 2:
-        q[:, i], q[:, i + 1] = np.cos(values), np.sin(values)
-    else:
-        q[:, i] = values
 
 
 def independent_joints(
@@ -64,8 +43,7 @@ def independent_joints(
     independent = []
     for joint in partition.joints:
         moved = base.copy()
-        lower, upper = _joint_range(robot, joint)
-        _set_joint(robot, moved, joint, generator.uniform(lower, upper, samples))
+        robot.set_joint_values(moved, joint, generator.uniform(*robot.joint_range(joint), samples))
         change = max(
             np.abs(robot.sensor_jacobian(q) - jacobian).max() for q, jacobian in zip(moved, jacobians, strict=True)
         )
@@ -121,10 +99,10 @@ def grid_check(
             f"{count:,} configurations, above max_configurations={max_configurations:,}; "
             "use fewer points or sample_convergence"
         )
-    axes = [np.linspace(*_joint_range(robot, joint), points) for joint in joints]
+    axes = [np.linspace(*robot.joint_range(joint), points) for joint in joints]
     configurations = np.tile(robot.home(), (count, 1))
     for joint, values in zip(joints, np.array(list(itertools.product(*axes))).T if joints else [], strict=False):
-        _set_joint(robot, configurations, joint, values)
+        robot.set_joint_values(configurations, joint, values)
     radii = spectral_radius_at(
         robot, configurations, partition=partition, workers=workers, scheduler=scheduler, progress=progress
     )

@@ -182,20 +182,38 @@ class Robot:
         """
         generator = as_rng(rng)
         samples = np.tile(self.neutral(), (count, 1))
-        lower, upper = self.position_limits()
         for joint in self.joint_names if joints is None else joints:
-            joint_model = self.model.joints[self.joint_id(joint)]
-            start = joint_model.idx_q
-            if joint_model.nq == 1 and joint_model.nv == 1:
-                lo, hi = lower[start], upper[start]
-                if not (math.isfinite(lo) and math.isfinite(hi)) or hi - lo > 1e6:
-                    lo, hi = -math.pi, math.pi
-                samples[:, start] = generator.uniform(lo, hi, count)
-            elif joint_model.nq == 2 and joint_model.nv == 1:
-                angle = generator.uniform(-math.pi, math.pi, count)
-                samples[:, start] = np.cos(angle)
-                samples[:, start + 1] = np.sin(angle)
+            if self.model.joints[self.joint_id(joint)].nv == 1:
+                self.set_joint_values(samples, joint, generator.uniform(*self.joint_range(joint), count))
         return samples
+
+    def joint_limits(self, joint: str) -> tuple[float, float] | None:
+        """The finite position limits of a 1-DOF joint with one coordinate, else None
+        (continuous and multi-DOF joints, and limits wider than 1e6)."""
+        joint_model = self.model.joints[self.joint_id(joint)]
+        if joint_model.nq != 1:
+            return None
+        i = joint_model.idx_q
+        lower, upper = float(self.model.lowerPositionLimit[i]), float(self.model.upperPositionLimit[i])
+        if not (math.isfinite(lower) and math.isfinite(upper)) or upper - lower > 1e6:
+            return None
+        return lower, upper
+
+    def joint_range(self, joint: str) -> tuple[float, float]:
+        """The range a 1-DOF joint is drawn or swept over: its limits, else [-pi, pi]."""
+        return self.joint_limits(joint) or (-math.pi, math.pi)
+
+    def set_joint_values(self, configurations: np.ndarray, joint: str, values: np.ndarray) -> None:
+        """Write a 1-DOF joint's values (angles for a continuous joint: cos, sin) into the
+        rows of ``configurations`` (N, nq), in place."""
+        joint_model = self.model.joints[self.joint_id(joint)]
+        if joint_model.nv != 1:
+            raise InputError(f"joint {joint!r} has {joint_model.nv} DOF; only 1-DOF joints can be set by value")
+        i = joint_model.idx_q
+        if joint_model.nq == 2:
+            configurations[:, i], configurations[:, i + 1] = np.cos(values), np.sin(values)
+        else:
+            configurations[:, i] = values
 
     def random_configuration(self, rng: RngLike = None) -> np.ndarray:
         """One configuration (nq,) drawn uniformly within the joint limits."""

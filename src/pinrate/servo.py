@@ -249,18 +249,11 @@ def servo(
 
 def _limited_coordinates(robot: Robot, partition: Partition) -> list[tuple[str, int, float, float]]:
     """(joint, q index, lower, upper) of the partition's 1-DOF joints with finite limits."""
-    lower, upper = robot.position_limits()
     limited = []
     for joint in partition.joints:
-        joint_model = robot.model.joints[robot.joint_id(joint)]
-        start = joint_model.idx_q
-        if (
-            joint_model.nq == 1
-            and math.isfinite(lower[start])
-            and math.isfinite(upper[start])
-            and upper[start] - lower[start] < 1e6
-        ):
-            limited.append((joint, start, float(lower[start]), float(upper[start])))
+        limits = robot.joint_limits(joint)
+        if limits is not None:
+            limited.append((joint, robot.model.joints[robot.joint_id(joint)].idx_q, *limits))
     return limited
 
 
