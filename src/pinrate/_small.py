@@ -23,7 +23,9 @@ from .errors import SingularBlockError
 Matrix = list[list[float]]
 Vector = list[float]
 
-SINGULAR_RATIO = 1e-10  # the same threshold as pinrate.algorithms.SINGULAR_RATIO
+SINGULAR_RATIO = 1e-10
+"""A square block M is singular when |det M| <= SINGULAR_RATIO * prod of its column norms
+(the one threshold of pinrate: algorithms and batched import it from here)."""
 _RATIO_SQUARED = SINGULAR_RATIO * SINGULAR_RATIO
 
 

@@ -26,7 +26,7 @@ from .errors import InputError, SingularBlockError, choices_hint
 from .partition import Partition, PartitionIndex, split_blocks
 from .robot import Robot, check_vector
 
-SINGULAR_RATIO = 1e-10
+SINGULAR_RATIO = _small.SINGULAR_RATIO
 """A square block M is singular when |det M| <= SINGULAR_RATIO * prod of its column norms."""
 
 EXACT_RCOND = 1e-10

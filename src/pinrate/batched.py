@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-SINGULAR_RATIO = 1e-10  # pinrate.algorithms.SINGULAR_RATIO
+from ._small import SINGULAR_RATIO
 
 
 def inverse(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
