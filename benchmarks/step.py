@@ -21,7 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 import pinrate
-from pinrate.cli import demo_target
+from pinrate.kinematics.targets import nearby_target
 
 
 def interleaved_medians(functions: dict[str, tuple[Callable[[], object], int]], repeats: int) -> dict[str, float]:
@@ -45,7 +45,7 @@ def measure(robot_name: str, *, batch: int, repeats: int, servo_steps: int) -> l
     q = robot.home()
     twist = np.array([0.05, -0.02, 0.03, 0.1, -0.05, 0.2])[: partition.m + partition.k]
     model, data, tip = robot.model, robot.model.createData(), robot.tip_id
-    _, target = demo_target(robot, partition, seed=0)
+    _, target = nearby_target(robot, partition, seed=0)
 
     def floor() -> object:
         return pin.computeFrameJacobian(model, data, q, tip, pin.LOCAL)

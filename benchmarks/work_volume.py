@@ -7,7 +7,7 @@ Three ways of computing ρ at the same sampled configurations, in one process:
 * the naive loop: ``pinrate.convergence(robot, q)`` per configuration (numpy per q);
 * the Jacobian floor: Pinocchio's ``computeFrameJacobian`` per configuration, nothing else;
 * ``pinrate.sample_convergence``: Pinocchio Jacobians per configuration, then the block
-  algebra and the eigenvalues batched in closed form (:mod:`pinrate.batched`).
+  algebra and the eigenvalues batched in closed form (:mod:`pinrate.solvers.batched`).
 
 Each figure is the median of ``repeats`` rounds; every round runs each method once
 (interleaved), so a machine that slows down shifts them alike.

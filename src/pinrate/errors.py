@@ -10,6 +10,8 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterable
 
+import numpy as np
+
 
 class PinrateError(Exception):
     """Root of every error pinrate raises on purpose."""
@@ -40,10 +42,12 @@ class SingularBlockError(PinrateError):
 
     def at(self, robot_name: str, q: object, detail: str = "") -> SingularBlockError:
         """The same error, its message completed with the robot and the configuration."""
-        import numpy as np
-
         where = np.array2string(np.asarray(q), precision=4)
         return SingularBlockError(f"{self} for robot {robot_name!r}{detail} at q = {where}", block=self.block, q=q)
+
+
+class ViewerError(PinrateError):
+    """The Meshcat server could not be started or reached."""
 
 
 def choices_hint(name: str, valid: Iterable[str], *, limit: int = 40) -> str:

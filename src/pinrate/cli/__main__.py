@@ -1,0 +1,7 @@
+"""``python -m pinrate.cli``."""
+
+import sys
+
+from .main import main
+
+sys.exit(main())

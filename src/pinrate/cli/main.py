@@ -1,0 +1,277 @@
+"""The ``pinrate`` command line: ``list``, ``demo``, ``analyze`` and ``paper``."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+import time
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from .. import analysis, robots
+from ..control.servo import servo
+from ..control.trajectory import Trajectory
+from ..errors import InputError, PinrateError
+from ..kinematics.manipulator import Robot
+from ..kinematics.partition import Partition
+from ..kinematics.targets import nearby_target
+from ..papers import markdown, results
+from ..robots import EXAMPLE_ROBOTS, ROBOT_NAMES, example_robot_data_share, load
+from ..solvers.registry import ALGORITHMS
+
+
+def _list(_: argparse.Namespace) -> int:
+    print("The papers' robots (pinrate.robots, urdf/):")
+    for name in ROBOT_NAMES:
+        summary_line = (getattr(robots, name).__doc__ or "").strip().splitlines()[0]
+        print(f"  {name:<16} {summary_line}")
+    available = example_robot_data_share() is not None
+    note = "" if available else "  (example-robot-data not installed)"
+    print(f"example-robot-data arms:{note}")
+    for entry in EXAMPLE_ROBOTS.values():
+        print(f"  {entry.name:<8} tip {entry.tip:<24} {entry.description}")
+    print("Any other URDF: pass its path.")
+    return 0
+
+
+def radius_range(trajectory: Trajectory) -> str:
+    """'min .. max' of ρ along a run, and whether a block was singular somewhere."""
+    finite = trajectory.spectral_radius[np.isfinite(trajectory.spectral_radius)]
+    text = f"{finite.min():.3f} .. {finite.max():.3f}" if finite.size else "undefined"
+    return text if finite.size == trajectory.spectral_radius.size else text + " (singular at some steps)"
+
+
+def summary(robot: Robot, trajectory: Trajectory) -> str:
+    """A short, readable account of a servo run."""
+    radius = radius_range(trajectory)
+    lines = [
+        f"robot      {robot.name}   tip {robot.tip}   sensor {robot.sensor}",
+        "partition  " + str(trajectory.partition).replace("\n", "\n           "),
+        f"algorithm  {trajectory.algorithm}   dt {trajectory.dt:g} s",
+        f"steps      {trajectory.steps}   ({trajectory.steps * trajectory.dt:.2f} s)",
+        f"converged  {'yes' if trajectory.converged else 'no'}: {trajectory.reason}",
+        f"errors     position {trajectory.position_error[0]:.4g} -> {trajectory.position_error[-1]:.3g} m,"
+        f"  orientation {trajectory.orientation_error[0]:.4g} -> {trajectory.orientation_error[-1]:.3g} rad",
+        f"rho(G,H)   {radius} along the path (the Theorem asks < 1)",
+    ]
+    return "\n".join(lines)
+
+
+def status_line(index: int, count: int, trajectory: Trajectory) -> str:
+    """One console line per servo segment."""
+    radius = radius_range(trajectory)
+    return (
+        f"segment {index}/{count}  {trajectory.algorithm}  {trajectory.steps} steps  "
+        f"{'converged' if trajectory.converged else 'NOT converged'}  "
+        f"position {trajectory.position_error[-1]:.2e} m  orientation {trajectory.orientation_error[-1]:.2e} rad  "
+        f"rho {radius}" + ("" if trajectory.converged else f"  ({trajectory.reason})")
+    )
+
+
+def _targets(args: argparse.Namespace, robot: Robot, partition: Partition) -> list[np.ndarray]:
+    if args.target is not None:
+        x, y, z, roll, pitch, yaw = args.target
+        return [pin.SE3(pin.rpy.rpyToMatrix(roll, pitch, yaw), np.array([x, y, z])).homogeneous]
+    return [nearby_target(robot, partition, args.seed + k)[1] for k in range(args.targets)]
+
+
+def _load(args: argparse.Namespace) -> Robot:
+    robot = load(args.robot, tip=args.tip, sensor=args.sensor)
+    if robot.tip_choice != "given":
+        print(f"tip        {robot.tip} ({robot.tip_choice}; --tip to choose another)")
+    return robot
+
+
+def _demo(args: argparse.Namespace) -> int:
+    robot = _load(args)
+    partition = Partition.auto(robot)
+    targets = _targets(args, robot, partition)
+    viewer = None
+    if not args.no_viewer:
+        from ..viewer import Viewer  # meshcat is imported only when a view is asked for
+
+        viewer = Viewer(robot, host=args.host, open_browser=args.open)
+        print(f"Meshcat viewer: {viewer.url}", flush=True)
+    try:
+        q = robot.home()
+        if viewer is not None:
+            viewer.show(q)
+        all_converged = True
+        for index, target in enumerate(targets, start=1):
+            trajectory = servo(
+                robot,
+                q,
+                target,
+                algorithm=args.algorithm,
+                partition=partition,
+                dt=args.dt,
+                gain=args.gain,
+                max_steps=args.max_steps,
+                tol=args.tol,
+            )
+            position, rpy = target[:3, 3], pin.rpy.matrixToRpy(target[:3, :3])
+            print(
+                f"target     xyz {np.array2string(position, precision=4)} m   "
+                f"rpy {np.array2string(rpy, precision=4)} rad (world)"
+            )
+            if len(targets) == 1 and viewer is None:
+                print(summary(robot, trajectory))
+            else:
+                if index == 1:
+                    print("partition  " + str(partition).replace("\n", "\n           "))
+                print(status_line(index, len(targets), trajectory), flush=True)
+            if viewer is not None:
+                viewer.play(trajectory, target=target, speed=args.speed)
+            all_converged &= trajectory.converged
+            q = trajectory.q[-1]
+        if viewer is not None:
+            if args.record:
+                print(f"recorded   {viewer.save_html(args.record)} ({viewer.recorded_frames} frames)")
+            if sys.stdin.isatty() and sys.stdout.isatty():
+                print("The view stays up: Ctrl-C to quit.", flush=True)
+                while True:
+                    time.sleep(3600)
+        return 0 if all_converged else 1
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        if viewer is not None:
+            viewer.close()
+
+
+def _partition_from_args(args: argparse.Namespace, robot: Robot) -> Partition:
+    automatic = Partition.auto(robot)
+    if args.arm is None and args.wrist is None and args.linear is None and args.angular is None:
+        return automatic
+
+    def names(text: str | None, default: tuple[str, ...]) -> tuple[str, ...]:
+        return default if text is None else tuple(name for name in text.split(",") if name)
+
+    return Partition(
+        names(args.arm, automatic.arm),
+        names(args.wrist, automatic.wrist),
+        linear=automatic.linear if args.linear is None else args.linear,
+        angular=automatic.angular if args.angular is None else args.angular,
+    )
+
+
+def _analyze(args: argparse.Namespace) -> int:
+    robot = _load(args)
+    partition = _partition_from_args(args, robot)
+    factory = None
+    if args.sweep:  # checked before the long part of the work
+        parameter, low, high = analysis.parse_sweep(args.sweep)
+        if args.robot not in robots.ROBOT_NAMES:
+            raise InputError(
+                f"--sweep needs one of the papers' parametric robots ({', '.join(robots.ROBOT_NAMES)}); "
+                "for another robot call pinrate.analysis.sweep with a factory"
+            )
+        if parameter not in robots.parameters(args.robot):
+            raise InputError(
+                f"{args.robot} has no parameter {parameter!r}; its parameters: "
+                f"{', '.join(robots.parameters(args.robot))}"
+            )
+
+        def factory(value: float) -> Robot:
+            return robots.build(args.robot, tip=args.tip, sensor=args.sensor, **{parameter: value})
+
+    started = time.perf_counter()
+    report = analysis.analyze(
+        robot,
+        samples=args.samples,
+        partition=partition,
+        rng=args.seed,
+        map_joints=args.joints,
+        points=args.points,
+        workers=args.workers,
+        scheduler=args.scheduler,
+    )
+    if factory is not None:
+        report.sweep = analysis.sweep(factory, parameter, low, high, samples=max(1000, args.samples // 25))
+    path = analysis.write_report(report, args.out)
+    print(report.markdown(), end="")
+    print(
+        f"\nwritten: {path} and {', '.join(p.name for p in report.files.values())} "
+        f"({time.perf_counter() - started:.1f} s)"
+    )
+    return 0
+
+
+def _paper(_: argparse.Namespace) -> int:
+    print(markdown(results()), end="")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="pinrate", description="Resolved-rate motion control for URDF arms.")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log what pinrate chooses")
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    listing = commands.add_parser("list", help="print every robot name pinrate can load")
+    listing.set_defaults(run=_list)
+
+    paper = commands.add_parser("paper", help="recompute every result of the two papers (Markdown table)")
+    paper.set_defaults(run=_paper)
+
+    analyze = commands.add_parser("analyze", help="where do MCA1/2/3 converge? report with region maps")
+    analyze.add_argument("robot", help="a name from `pinrate list` or a URDF path")
+    analyze.add_argument("--tip", help="TCP frame")
+    analyze.add_argument("--sensor", help="frame the twist is expressed in")
+    analyze.add_argument("--arm", help="comma-separated arm joints (default: the automatic partition)")
+    analyze.add_argument("--wrist", help="comma-separated wrist joints")
+    analyze.add_argument("--linear", help="controlled linear axes, e.g. xy")
+    analyze.add_argument("--angular", help="controlled angular axes, e.g. z")
+    analyze.add_argument("--samples", type=int, default=100_000, help="configurations for the work-volume share")
+    analyze.add_argument("--joints", nargs=2, metavar=("X", "Y"), help="the region map's two joints")
+    analyze.add_argument("--points", type=int, default=121, help="region map grid points per joint")
+    analyze.add_argument("--sweep", metavar="PARAM=LO:HI", help="sweep a parameter of a papers' robot")
+    analyze.add_argument("--out", default="analysis", help="folder for report.md and the PNGs")
+    analyze.add_argument("--workers", type=int, default=1, help="processes on this machine")
+    analyze.add_argument("--scheduler", help="a Dask scheduler address (needs pinrate[dask])")
+    analyze.add_argument("--seed", type=int, default=0)
+    analyze.set_defaults(run=_analyze)
+
+    demo = commands.add_parser("demo", help="servo a robot from home to a target and summarise")
+    demo.add_argument("robot", help="a name from `pinrate list` or a URDF path")
+    demo.add_argument("--tip", help="TCP frame (default: the name table's, or the chain's end)")
+    demo.add_argument("--sensor", help="frame the twist is expressed in (default: the tip)")
+    demo.add_argument("--algorithm", default="mca1", choices=ALGORITHMS)
+    demo.add_argument(
+        "--target",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "R", "P", "Y"),
+        help="target tip pose in the world: metres and roll-pitch-yaw radians",
+    )
+    demo.add_argument("--seed", type=int, default=0, help="seed of the default random target")
+    demo.add_argument("--dt", type=float, default=0.01, help="control period in seconds")
+    demo.add_argument("--gain", type=float, default=1.0, help="twist per unit pose error (1/s)")
+    demo.add_argument("--max-steps", type=int, default=2000)
+    demo.add_argument("--tol", type=float, default=1e-4, help="convergence tolerance (m and rad)")
+    demo.add_argument("--targets", type=int, default=1, help="number of random targets, one after the other")
+    demo.add_argument("--speed", type=float, default=1.0, help="playback speed in the viewer (x real time)")
+    demo.add_argument("--open", action="store_true", help="open the viewer in the default browser")
+    demo.add_argument("--record", metavar="HTML", help="write a standalone HTML replay of the whole run")
+    demo.add_argument(
+        "--host", default="127.0.0.1", help="address the Meshcat server listens on (default: this machine only)"
+    )
+    demo.add_argument("--no-viewer", action="store_true", help="headless: print the summary only")
+    demo.set_defaults(run=_demo)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="pinrate: %(message)s")
+    try:
+        return int(args.run(args))
+    except PinrateError as error:
+        print(f"pinrate: error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

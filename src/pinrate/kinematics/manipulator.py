@@ -1,0 +1,286 @@
+"""A URDF manipulator with a tool centre point (tip) and a sensor frame.
+
+The one quantity everything else builds on is the Jacobian of the TCP twist expressed in the
+sensor frame (Shoham & Koren 1987, eq. 1-8): with ``J_w`` the Jacobian in world axes and
+``C`` the rotation of the sensor frame in the world, ``J = C^-1 J_w`` (eq. 8). Pinocchio
+gives the tip Jacobian in the tip's own axes (``LOCAL``: velocity of the tip origin and
+angular velocity, both in tip axes), so
+
+    J_sensor = blockdiag(R, R) J_local,   R = R_world_sensor^T R_world_tip.
+
+Kinematics are Pinocchio's throughout: URDF parsing, frame placements, Jacobians and
+integration on the configuration space (continuous joints have nq = 2, nv = 1).
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import math
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..checks import RngLike, as_rng, check_vector
+from ..errors import InputError, PinrateError, choices_hint
+from .frames import default_tip_frame, resolve_frame
+
+logger = logging.getLogger("pinrate")
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """What a worker needs to rebuild a robot's kinematics: URDF text, tip, sensor, name
+    (picklable; :func:`pinrate.kinematics.urdf.robot_from_spec` builds it)."""
+
+    urdf_text: str
+    tip: str
+    sensor: str
+    name: str
+
+
+class Robot:
+    """A Pinocchio model with a tip (TCP) frame and a sensor frame.
+
+    Attributes:
+        model, data: the Pinocchio model and its data (the data is scratch space reused by
+            every call, so a Robot is not thread-safe; use one Robot per thread).
+        tip: name of the frame whose origin is the TCP.
+        tip_choice: how the tip was picked ("given", or how pinrate chose it).
+        sensor: name of the frame whose axes twists are expressed in.
+        joint_names: the moving joints, in velocity-vector order.
+        reference_configurations: named configurations (from the SRDF, plus ``"home"``).
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        *,
+        tip: str | None = None,
+        sensor: str | None = None,
+        name: str = "",
+        urdf_path: Path | None = None,
+        urdf_text: str | None = None,
+        package_dirs: Sequence[str] = (),
+        reference_configurations: Mapping[str, np.ndarray] | None = None,
+    ) -> None:
+        self.model = model
+        self.data = model.createData()
+        self.name = name or model.name
+        self._urdf_path = urdf_path
+        self._urdf_text = urdf_text
+        self._package_dirs = list(package_dirs)
+        self._visual_model: pin.GeometryModel | None = None
+
+        if tip is None:
+            self.tip_id = default_tip_frame(model)
+            self.tip_choice = "chosen: the deepest frame at the end of the longest chain of moving joints"
+            logger.info("%s: no tip given, %s: %r", self.name, self.tip_choice, model.frames[self.tip_id].name)
+        else:
+            self.tip_id = resolve_frame(model, tip, role="tip", robot=self.name)
+            self.tip_choice = "given"
+        self.tip = model.frames[self.tip_id].name
+        self.sensor_id = self.tip_id if sensor is None else resolve_frame(model, sensor, role="sensor", robot=self.name)
+        self.sensor = model.frames[self.sensor_id].name
+
+        self.joint_names: tuple[str, ...] = tuple(
+            model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0
+        )
+        self._joint_ids = {model.names[j]: j for j in range(1, model.njoints)}
+        self.reference_configurations: dict[str, np.ndarray] = {
+            key: np.array(value, dtype=float) for key, value in (reference_configurations or {}).items()
+        }
+
+    # ------------------------------------------------------------------ sizes and names
+    @property
+    def nq(self) -> int:
+        return int(self.model.nq)
+
+    @property
+    def nv(self) -> int:
+        return int(self.model.nv)
+
+    def joint_id(self, joint: str) -> int:
+        """Pinocchio joint index of a moving joint, or an InputError listing the joints."""
+        joint_id = self._joint_ids.get(joint)
+        if joint_id is None or self.model.joints[joint_id].nv == 0:
+            raise InputError(
+                f"robot {self.name!r} has no moving joint {joint!r}." + choices_hint(joint, self.joint_names)
+            )
+        return joint_id
+
+    def velocity_indices(self, joint: str) -> list[int]:
+        """Indices of a joint's components in the velocity vector (one for 1-DOF joints)."""
+        joint_model = self.model.joints[self.joint_id(joint)]
+        return list(range(joint_model.idx_v, joint_model.idx_v + joint_model.nv))
+
+    def tip_chain(self) -> tuple[str, ...]:
+        """The moving joints that support the tip, base to tip."""
+        parent = self.model.frames[self.tip_id].parentJoint
+        return tuple(self.model.names[j] for j in self.model.supports[parent] if j > 0 and self.model.joints[j].nv > 0)
+
+    def spec(self) -> RobotSpec:
+        """A picklable recipe of this robot's kinematics (for worker processes and Dask)."""
+        if self._urdf_text is None:
+            raise PinrateError(f"robot {self.name!r} was built from a model, not URDF text: it has no spec")
+        return RobotSpec(urdf_text=self._urdf_text, tip=self.tip, sensor=self.sensor, name=self.name)
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, nq={self.nq}, nv={self.nv}, tip={self.tip!r}, sensor={self.sensor!r})"
+
+    # ------------------------------------------------------------------ configurations
+    def neutral(self) -> np.ndarray:
+        """Pinocchio's neutral configuration (nq,)."""
+        return np.array(pin.neutral(self.model))
+
+    def home(self) -> np.ndarray:
+        """A non-singular start pose: the ``home`` reference configuration, else neutral."""
+        if "home" in self.reference_configurations:
+            return self.reference_configurations["home"].copy()
+        return self.neutral()
+
+    def position_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper limits of q (nq,), as Pinocchio stores them."""
+        return np.array(self.model.lowerPositionLimit), np.array(self.model.upperPositionLimit)
+
+    def sample_configurations(
+        self, count: int, rng: RngLike = None, *, joints: Sequence[str] | None = None
+    ) -> np.ndarray:
+        """``count`` configurations (count, nq) drawn uniformly within the joint limits.
+
+        Only ``joints`` (default: all moving joints) are drawn; the others stay at neutral.
+        A 1-DOF joint without finite limits is drawn in [-pi, pi]; a continuous joint
+        (nq = 2: cos, sin) by its angle in [-pi, pi]; other multi-DOF joints stay neutral.
+        """
+        generator = as_rng(rng)
+        samples = np.tile(self.neutral(), (count, 1))
+        for joint in self.joint_names if joints is None else joints:
+            if self.model.joints[self.joint_id(joint)].nv == 1:
+                self.set_joint_values(samples, joint, generator.uniform(*self.joint_range(joint), count))
+        return samples
+
+    def joint_limits(self, joint: str) -> tuple[float, float] | None:
+        """The finite position limits of a 1-DOF joint with one coordinate, else None
+        (continuous and multi-DOF joints, and limits wider than 1e6)."""
+        joint_model = self.model.joints[self.joint_id(joint)]
+        if joint_model.nq != 1:
+            return None
+        i = joint_model.idx_q
+        lower, upper = float(self.model.lowerPositionLimit[i]), float(self.model.upperPositionLimit[i])
+        if not (math.isfinite(lower) and math.isfinite(upper)) or upper - lower > 1e6:
+            return None
+        return lower, upper
+
+    def joint_range(self, joint: str) -> tuple[float, float]:
+        """The range a 1-DOF joint is drawn or swept over: its limits, else [-pi, pi]."""
+        return self.joint_limits(joint) or (-math.pi, math.pi)
+
+    def set_joint_values(self, configurations: np.ndarray, joint: str, values: np.ndarray) -> None:
+        """Write a 1-DOF joint's values (angles for a continuous joint: cos, sin) into the
+        rows of ``configurations`` (N, nq), in place."""
+        joint_model = self.model.joints[self.joint_id(joint)]
+        if joint_model.nv != 1:
+            raise InputError(f"joint {joint!r} has {joint_model.nv} DOF; only 1-DOF joints can be set by value")
+        i = joint_model.idx_q
+        if joint_model.nq == 2:
+            configurations[:, i], configurations[:, i + 1] = np.cos(values), np.sin(values)
+        else:
+            configurations[:, i] = values
+
+    def random_configuration(self, rng: RngLike = None) -> np.ndarray:
+        """One configuration (nq,) drawn uniformly within the joint limits."""
+        return self.sample_configurations(1, rng)[0]
+
+    def check_q(self, q: object) -> np.ndarray:
+        """q as a float array of shape (nq,); InputError on a wrong length or NaN/inf."""
+        return check_vector(q, self.nq, "q", names=self._q_names)
+
+    @functools.cached_property
+    def _q_names(self) -> list[str]:
+        names = [""] * self.nq
+        for joint_id in range(1, self.model.njoints):
+            joint_model = self.model.joints[joint_id]
+            for offset in range(joint_model.nq):
+                names[joint_model.idx_q + offset] = self.model.names[joint_id]
+        return names
+
+    def integrate(self, q: np.ndarray, joint_rates: np.ndarray, dt: float) -> np.ndarray:
+        """q moved by joint_rates (nv,) for dt seconds on the configuration space."""
+        return np.array(pin.integrate(self.model, q, joint_rates * dt))
+
+    # ------------------------------------------------------------------ kinematics
+    def pose(self, q: object) -> np.ndarray:
+        """The tip frame in the world, a 4x4 homogeneous matrix."""
+        q = self.check_q(q)
+        pin.forwardKinematics(self.model, self.data, q)
+        return np.array(pin.updateFramePlacement(self.model, self.data, self.tip_id).homogeneous)
+
+    def frame_pose(self, q: object, frame: str) -> np.ndarray:
+        """Any frame in the world, a 4x4 homogeneous matrix."""
+        q = self.check_q(q)
+        frame_id = resolve_frame(self.model, frame, role="frame", robot=self.name)
+        pin.forwardKinematics(self.model, self.data, q)
+        return np.array(pin.updateFramePlacement(self.model, self.data, frame_id).homogeneous)
+
+    def jacobian(self, q: object) -> np.ndarray:
+        """The sensor-frame Jacobian (6, nv) at q (Shoham & Koren eq. 1, 8).
+
+        Rows [vx vy vz wx wy wz]: the velocity of the tip frame's origin and the angular
+        velocity, both expressed in the sensor frame's axes.
+        """
+        return self.jacobian_unchecked(self.check_q(q))
+
+    def jacobian_unchecked(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`jacobian` without the input check, for a q that already went through
+        :meth:`check_q` (or was drawn by pinrate): the hot path of loops over configurations.
+
+        With the sensor at the tip this is one Pinocchio call (the LOCAL frame Jacobian).
+        """
+        if self.sensor_id == self.tip_id:
+            return pin.computeFrameJacobian(self.model, self.data, q, self.tip_id, pin.LOCAL)
+        return self.kinematics(q)[0]
+
+    def kinematics(self, q: np.ndarray) -> tuple[np.ndarray, pin.SE3, pin.SE3]:
+        """(J_sensor, world_T_tip, world_T_sensor) at a checked q, in one kinematics pass.
+
+        ``computeJointJacobians`` runs the forward kinematics too, so the frame placements
+        updated afterwards are fresh for this q.
+        """
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, q)
+        jacobian_local = pin.getFrameJacobian(model, data, self.tip_id, pin.LOCAL)
+        world_T_tip = pin.updateFramePlacement(model, data, self.tip_id)
+        if self.sensor_id == self.tip_id:
+            return jacobian_local, world_T_tip, world_T_tip
+        world_T_sensor = pin.updateFramePlacement(model, data, self.sensor_id)
+        sensor_R_tip = world_T_sensor.rotation.T @ world_T_tip.rotation
+        jacobian = np.empty_like(jacobian_local)
+        jacobian[:3] = sensor_R_tip @ jacobian_local[:3]
+        jacobian[3:] = sensor_R_tip @ jacobian_local[3:]
+        return jacobian, world_T_tip, world_T_sensor
+
+    # ------------------------------------------------------------------ visuals
+    @property
+    def visual_model(self) -> pin.GeometryModel:
+        """Visual geometries, loaded on first use; an empty model (with a warning) on failure."""
+        if self._visual_model is None:
+            self._visual_model = self._load_visuals()
+        return self._visual_model
+
+    def _load_visuals(self) -> pin.GeometryModel:
+        try:
+            if self._urdf_path is None and self._urdf_text is not None:
+                return pin.buildGeomFromUrdfString(
+                    self.model, self._urdf_text, pin.GeometryType.VISUAL, package_dirs=self._package_dirs
+                )
+            if self._urdf_path is not None:
+                return pin.buildGeomFromUrdf(
+                    self.model, str(self._urdf_path), pin.GeometryType.VISUAL, package_dirs=self._package_dirs
+                )
+        except (RuntimeError, ValueError, OSError) as error:
+            warnings.warn(f"{self.name}: visual meshes not loaded ({error}); kinematics unaffected", stacklevel=2)
+        return pin.GeometryModel()

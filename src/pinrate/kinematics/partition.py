@@ -1,0 +1,231 @@
+"""The arm/wrist partition of the sensor-frame Jacobian (Shoham & Koren eq. 17-19).
+
+    [ v ]   [ A  B ] [ qdot_arm   ]
+    [ Ω ] = [ U  W ] [ qdot_wrist ]                                        (eq. 17, 19)
+
+v holds the controlled linear components and Ω the controlled angular components of the
+TCP twist, both in the sensor frame's axes. A maps arm rates to TCP velocity, W wrist rates
+to angular velocity, B (wrist → velocity) and U (arm → angular velocity) are the couplings
+the motion control algorithms neglect.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .manipulator import Robot
+
+_AXES = "xyz"
+_ZERO_TOL = 1e-9  # a Jacobian entry counts as zero below this times (1 + max |J|)
+_AUTO_SAMPLES = 32  # random configurations Partition.auto inspects (plus neutral and home)
+
+# Per-robot caches kept here, not on the robot: they go when the robot goes.
+_INDEX_CACHE: weakref.WeakKeyDictionary[Robot, dict[Partition, PartitionIndex]] = weakref.WeakKeyDictionary()
+_AUTO_CACHE: weakref.WeakKeyDictionary[Robot, Partition] = weakref.WeakKeyDictionary()
+
+Selector = tuple[Any, Any]
+"""An index of J[rows, columns]: two slices, or np.ix_ index arrays."""
+
+
+def selector(rows: list[int], columns: list[int]) -> Selector:
+    """Index of J[rows, columns]: two slices when both are contiguous (one cheap view)."""
+
+    def as_slice(indices: list[int]) -> slice | None:
+        if not indices:
+            return slice(0, 0)
+        if indices == list(range(indices[0], indices[-1] + 1)):
+            return slice(indices[0], indices[-1] + 1)
+        return None
+
+    row_slice, column_slice = as_slice(rows), as_slice(columns)
+    if row_slice is not None and column_slice is not None:
+        return (row_slice, column_slice)
+    row_index, column_index = np.ix_(rows, columns)
+    return (row_index, column_index)
+
+
+def square_and_small(m: int, n_arm: int, k: int, n_wrist: int) -> bool:
+    """A and W square, A of size 1 to 3, W of size 0 to 3: the closed-form kernels apply."""
+    return m == n_arm and k == n_wrist and 0 < m <= 3 and k <= 3
+
+
+@dataclass(frozen=True)
+class PartitionIndex:
+    """A partition resolved against one robot: row and column indices into J (6, nv)."""
+
+    rows: np.ndarray  # controlled twist components, linear then angular (0-5)
+    arm_columns: np.ndarray
+    wrist_columns: np.ndarray
+    m: int  # number of linear rows
+    k: int  # number of angular rows
+    nv: int  # the robot's velocity dimension
+    columns: np.ndarray = field(init=False)
+    all_columns: bool = field(init=False)  # the columns are 0 .. nv-1 in order
+    all_rows: bool = field(init=False)  # the rows are 0 .. 5 in order
+    small: bool = field(init=False)  # square blocks of size <= 3: closed-form kernels apply
+    selectors: tuple[Selector, ...] = field(init=False)  # A, B, U, W in J
+
+    def __post_init__(self) -> None:
+        columns = np.concatenate([self.arm_columns, self.wrist_columns])
+        set_ = object.__setattr__
+        set_(self, "columns", columns)
+        linear, angular = self.rows[: self.m].tolist(), self.rows[self.m :].tolist()
+        arm, wrist = self.arm_columns.tolist(), self.wrist_columns.tolist()
+        set_(self, "selectors", tuple(selector(r, c) for r in (linear, angular) for c in (arm, wrist)))
+        set_(self, "small", square_and_small(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
+        set_(self, "all_columns", columns.tolist() == list(range(self.nv)))
+        set_(self, "all_rows", self.rows.tolist() == list(range(6)))
+
+
+@dataclass(frozen=True, init=False)
+class Partition:
+    """Which joints form the arm and the wrist, and which twist components are controlled.
+
+    Args:
+        arm: names of the arm joints (columns of A and U), in the order their rates are used.
+        wrist: names of the wrist joints (columns of B and W).
+        linear: sensor-frame axes of the controlled linear velocity (rows of A, B), e.g. "xy".
+        angular: sensor-frame axes of the controlled angular velocity (rows of U, W), e.g. "z".
+    """
+
+    arm: tuple[str, ...]
+    wrist: tuple[str, ...]
+    linear: str
+    angular: str
+
+    def __init__(self, arm: object, wrist: object, *, linear: str = "xyz", angular: str = "xyz") -> None:
+        arm_names = _names(arm, "arm")
+        wrist_names = _names(wrist, "wrist")
+        for group, names in (("arm", arm_names), ("wrist", wrist_names)):
+            repeated = sorted({name for name in names if names.count(name) > 1})
+            if repeated:
+                raise InputError(f"partition {group} lists joint(s) {repeated} more than once")
+        overlap = sorted(set(arm_names) & set(wrist_names))
+        if overlap:
+            raise InputError(f"partition arm and wrist overlap: joint(s) {overlap} are in both")
+        object.__setattr__(self, "arm", arm_names)
+        object.__setattr__(self, "wrist", wrist_names)
+        object.__setattr__(self, "linear", _axes(linear, "linear"))
+        object.__setattr__(self, "angular", _axes(angular, "angular"))
+
+    @property
+    def m(self) -> int:
+        """Number of controlled linear components (rows of A)."""
+        return len(self.linear)
+
+    @property
+    def k(self) -> int:
+        """Number of controlled angular components (rows of W)."""
+        return len(self.angular)
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """Arm joints then wrist joints."""
+        return self.arm + self.wrist
+
+    def rows(self) -> list[int]:
+        """Row indices into the 6-row twist: linear axes (0-2) then angular axes (3-5)."""
+        return [_AXES.index(a) for a in self.linear] + [3 + _AXES.index(a) for a in self.angular]
+
+    def resolve(self, robot: Robot) -> PartitionIndex:
+        """Row and column indices of this partition in ``robot``'s Jacobian (cached per robot)."""
+        cache = _INDEX_CACHE.setdefault(robot, {})
+        index = cache.get(self)
+        if index is None:
+            arm_columns = [c for joint in self.arm for c in robot.velocity_indices(joint)]
+            wrist_columns = [c for joint in self.wrist for c in robot.velocity_indices(joint)]
+            index = PartitionIndex(
+                rows=np.array(self.rows(), dtype=np.intp),
+                arm_columns=np.array(arm_columns, dtype=np.intp),
+                wrist_columns=np.array(wrist_columns, dtype=np.intp),
+                m=self.m,
+                k=self.k,
+                nv=robot.nv,
+            )
+            cache[self] = index
+        return index
+
+    def blocks(self, robot: Robot, J: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(A, B, U, W) of eq. 19: A = J[linear, arm], B = J[linear, wrist],
+        U = J[angular, arm], W = J[angular, wrist]."""
+        jacobian = np.asarray(J, dtype=float)
+        if jacobian.shape != (6, robot.nv):
+            raise InputError(f"J must have shape (6, {robot.nv}) for robot {robot.name!r}, got {jacobian.shape}")
+        index = self.resolve(robot)
+        return split_blocks(jacobian[np.ix_(index.rows, index.columns)], index.m, len(index.arm_columns))
+
+    def __str__(self) -> str:
+        def joints(names: tuple[str, ...]) -> str:
+            return ", ".join(names) if names else "none"
+
+        lines = [
+            f"arm ({len(self.arm)} joints, drive linear {self.linear or 'none'} through A): {joints(self.arm)}",
+            f"wrist ({len(self.wrist)} joints, drive angular {self.angular or 'none'} through W): {joints(self.wrist)}",
+            f"A is {self.m}x{len(self.arm)}, W is {self.k}x{len(self.wrist)}; "
+            f"G = U A^-1 B W^-1 is {self.k}x{self.k}, H = B W^-1 U A^-1 is {self.m}x{self.m}",
+        ]
+        return "\n".join(lines)
+
+    @classmethod
+    def auto(cls, robot: Robot) -> Partition:
+        """The default partition of ``robot`` (cached on the robot).
+
+        Only joints of the tip's chain whose Jacobian column is non-zero somewhere take part;
+        twist components whose rows are zero at every sampled configuration are dropped.
+        With n joints, m linear and k angular components, the wrist is the last
+        min(k, max(n - m, 0)) joints and the arm the ones before them.
+        """
+        cached = _AUTO_CACHE.get(robot)
+        if cached is not None:
+            return cached
+        samples = np.vstack([robot.neutral(), robot.home(), robot.sample_configurations(_AUTO_SAMPLES, rng=20260101)])
+        magnitude = np.zeros((6, robot.nv))
+        for q in samples:
+            magnitude = np.maximum(magnitude, np.abs(robot.jacobian(q)))
+        tol = _ZERO_TOL * (1.0 + magnitude.max())
+        moving = magnitude > tol
+        joints = [j for j in robot.tip_chain() if any(moving[:, c].any() for c in robot.velocity_indices(j))]
+        columns = [c for j in joints for c in robot.velocity_indices(j)]
+        active_rows = moving[:, columns].any(axis=1) if columns else np.zeros(6, dtype=bool)
+        linear = "".join(a for i, a in enumerate(_AXES) if active_rows[i])
+        angular = "".join(a for i, a in enumerate(_AXES) if active_rows[3 + i])
+        n_wrist = min(len(angular), max(len(joints) - len(linear), 0))
+        split = len(joints) - n_wrist
+        partition = cls(joints[:split], joints[split:], linear=linear, angular=angular)
+        _AUTO_CACHE[robot] = partition
+        return partition
+
+
+def split_blocks(jacobian: np.ndarray, m: int, n_arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(A, B, U, W) of a Jacobian already restricted to the partition's rows and columns."""
+    return (jacobian[:m, :n_arm], jacobian[:m, n_arm:], jacobian[m:, :n_arm], jacobian[m:, n_arm:])
+
+
+def _names(value: object, what: str) -> tuple[str, ...]:
+    if isinstance(value, str):
+        return (value,)
+    try:
+        names: tuple[object, ...] = tuple(value)  # type: ignore[arg-type]
+    except TypeError:
+        raise InputError(f"partition {what} must be a sequence of joint names") from None
+    for name in names:
+        if not isinstance(name, str):
+            raise InputError(f"partition {what} must hold joint names (str), got {name!r}")
+    return tuple(str(name) for name in names)
+
+
+def _axes(value: object, what: str) -> str:
+    if not isinstance(value, str):
+        raise InputError(f"{what} must be a string of axis letters from 'xyz', got {value!r}")
+    unknown = sorted({a for a in value if a not in _AXES})
+    if unknown:
+        raise InputError(f"{what} axes {value!r}: unknown letter(s) {unknown}; valid letters: x, y, z")
+    repeated = sorted({a for a in value if value.count(a) > 1})
+    if repeated:
+        raise InputError(f"{what} axes {value!r}: letter(s) {repeated} appear more than once")
+    return value

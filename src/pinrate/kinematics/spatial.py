@@ -1,0 +1,40 @@
+"""Pose errors and speed saturation: what a sensor on the arm measures and commands.
+
+Shoham & Koren §2, Fig. 3: the sensor sees the target relative to itself, so errors are
+expressed in the sensor frame's axes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+
+
+def pose_error(world_T_tip: pin.SE3, world_T_sensor: pin.SE3, target: pin.SE3) -> np.ndarray:
+    """[position error; rotation error] (6,) from the tip to the target, in sensor axes (m, rad).
+
+    With S the sensor pose: position R_s^T (p_target - p_tip) = (S^-1 T_target).p -
+    (S^-1 T_tip).p and rotation R_s^T log3(R_target R_tip^T) = log3(R_a R_b^T) with
+    R_a = R_s^T R_target and R_b = R_s^T R_tip (log3 commutes with conjugation).
+    """
+    sensor_T_target = world_T_sensor.actInv(target)
+    if world_T_sensor is world_T_tip:
+        return np.concatenate([sensor_T_target.translation, pin.log3(sensor_T_target.rotation)])
+    sensor_T_tip = world_T_sensor.actInv(world_T_tip)
+    return np.concatenate(
+        [
+            sensor_T_target.translation - sensor_T_tip.translation,
+            pin.log3(sensor_T_target.rotation @ sensor_T_tip.rotation.T),
+        ]
+    )
+
+
+def saturate(values: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
+    """``values`` scaled down, direction kept, to Euclidean norm at most ``limit``; and
+    whether it was scaled."""
+    norm = math.sqrt(float(values @ values))
+    if norm > limit:
+        return values * (limit / norm), True
+    return values, False

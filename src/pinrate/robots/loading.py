@@ -1,0 +1,84 @@
+"""``pinrate.load``: a robot from a URDF path, a papers' robot name or an example-robot-data name."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from ..errors import InputError, LoadError, choices_hint
+from ..kinematics.manipulator import Robot
+from ..kinematics.urdf import read_urdf, robot_from_urdf
+from . import papers
+from .catalog import EXAMPLE_ROBOTS, CatalogEntry, example_robot_data_share, example_robot_path
+
+
+def known_names() -> list[str]:
+    """Every name :func:`load` accepts: the papers' robots, then example-robot-data's."""
+    return [*papers.ROBOT_NAMES, *EXAMPLE_ROBOTS]
+
+
+def load(source: str | os.PathLike[str], *, tip: str | None = None, sensor: str | None = None) -> Robot:
+    """Load a robot from a URDF path, a papers'-robot name or an example-robot-data name.
+
+    Args:
+        source: a path to a ``.urdf`` file; or a name from :func:`known_names`
+            (the papers' robots such as ``"scara"``, and ``"ur5"``, ``"panda"``, ...).
+        tip: the frame whose origin is the TCP (a link, joint or fixed frame; a name that is
+            both a link and a joint means the link). Default: the name table's tip; for any
+            other URDF, the deepest frame at the end of the longest chain of moving joints.
+        sensor: the frame whose axes twists are expressed in. Default: the tip.
+
+    Raises:
+        LoadError: missing file, malformed XML, not a URDF, unknown robot name.
+        FrameError: unknown tip or sensor frame (the message lists the frames).
+    """
+    if isinstance(source, os.PathLike) or (isinstance(source, str) and _looks_like_path(source)):
+        path = Path(source).expanduser().resolve()
+        text = read_urdf(path)
+        return robot_from_urdf(
+            text,
+            label=str(path),
+            tip=tip,
+            sensor=sensor,
+            urdf_path=path,
+            package_dirs=_package_dirs_for(path),
+        )
+    if not isinstance(source, str):
+        raise InputError(f"source must be a URDF path or a robot name, not {type(source).__name__}")
+    if source in papers.ROBOT_NAMES:
+        return papers.build(source, tip=tip, sensor=sensor)
+    entry = EXAMPLE_ROBOTS.get(source)
+    if entry is None:
+        raise LoadError(f"unknown robot name {source!r}." + choices_hint(source, known_names()))
+    return _load_example_robot(entry, tip=tip, sensor=sensor)
+
+
+def _looks_like_path(source: str) -> bool:
+    return source.endswith((".urdf", ".xml")) or os.sep in source or "/" in source
+
+
+def _package_dirs_for(path: Path) -> list[str]:
+    """Folders ``package://`` URIs may resolve against: the file's ancestors, example-robot-data."""
+    dirs = [str(parent) for parent in list(path.parents)[:4]]
+    share = example_robot_data_share()
+    if share is not None:
+        dirs.append(str(share))
+    return dirs
+
+
+def _load_example_robot(entry: CatalogEntry, *, tip: str | None, sensor: str | None) -> Robot:
+    path = example_robot_path(entry.urdf)
+    srdf = example_robot_path(entry.srdf) if entry.srdf else None
+    share = example_robot_data_share()
+    return robot_from_urdf(
+        read_urdf(path),
+        label=entry.name,
+        tip=tip or entry.tip,
+        sensor=sensor,
+        urdf_path=path,
+        package_dirs=[str(share)] if share else [],
+        srdf_path=srdf,
+        home=entry.home,
+        home_values=entry.home_values,
+        name=entry.name,
+    )

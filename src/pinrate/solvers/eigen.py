@@ -1,0 +1,114 @@
+"""Spectral radius of a real square matrix of size 0 to 3, in closed form: the one routine
+behind every rho that pinrate computes in closed form, on Python floats (one matrix, the
+servo's step) and on numpy arrays (a stack of matrices, the work-volume maps) alike.
+
+The same source runs on both because every operation goes through an :class:`Ops`
+namespace: :data:`FLOATS` (``math``, branches by ``if``) or :data:`ARRAYS` (numpy
+ufuncs, branches by ``np.where``). Both branches of a ``where`` are evaluated, so every
+argument of a square root, a cube root, an arc cosine or a division is made safe first.
+
+Accuracy: the characteristic polynomial is taken of the *shifted* matrix M - s I with
+s = tr M / n (for 2x2: the discriminant ((a - d) / 2)^2 + b c), so a multiple eigenvalue
+(c I) or a cluster costs no cancellation of the large terms; Cardano's formula takes the
+cube root of the larger of -q/2 +- sqrt(D) and the other from their product -p/3. The
+eigenvalues are then accurate to about eps * ||M|| where M's eigenvalues are
+well-conditioned, the same order as LAPACK's; a double root of a normal matrix, whose
+polynomial roots are ill-conditioned, loses up to sqrt(eps) of that.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+_SQRT3_HALF = math.sqrt(3.0) / 2.0
+_TWO_PI_THIRDS = 2.0 * math.pi / 3.0
+_FLAT = 1e-200
+
+
+@dataclass(frozen=True)
+class Ops:
+    """The elementary operations the routine needs, for one kind of number."""
+
+    sqrt: Callable[[Any], Any]
+    cbrt: Callable[[Any], Any]
+    arccos: Callable[[Any], Any]
+    cos: Callable[[Any], Any]
+    hypot: Callable[[Any, Any], Any]
+    maximum: Callable[[Any, Any], Any]
+    minimum: Callable[[Any, Any], Any]
+    where: Callable[[Any, Any, Any], Any]
+    absolute: Callable[[Any], Any]
+
+
+def _float_cbrt(x: float) -> float:
+    return math.copysign(abs(x) ** (1.0 / 3.0), x)
+
+
+def _float_where(condition: bool, if_true: float, if_false: float) -> float:
+    return if_true if condition else if_false
+
+
+FLOATS = Ops(math.sqrt, _float_cbrt, math.acos, math.cos, math.hypot, max, min, _float_where, abs)
+"""Python floats: one matrix."""
+
+ARRAYS = Ops(np.sqrt, np.cbrt, np.arccos, np.cos, np.hypot, np.maximum, np.minimum, np.where, np.abs)
+"""numpy arrays: elementwise over a stack of matrices."""
+
+
+def spectral_radius_1(a: Any, ops: Ops) -> Any:
+    """max |λ| of [[a]]."""
+    return ops.absolute(a)
+
+
+def spectral_radius_2(a: Any, b: Any, c: Any, d: Any, ops: Ops) -> Any:
+    """max |λ| of [[a, b], [c, d]]: λ = (a + d)/2 ± sqrt(D), D = ((a - d)/2)^2 + b c.
+
+    Real roots (D >= 0): |(a + d)/2| + sqrt(D); a complex pair: |λ|^2 = det = a d - b c.
+    """
+    half_difference = (a - d) * 0.5
+    discriminant = half_difference * half_difference + b * c
+    real = ops.absolute((a + d) * 0.5) + ops.sqrt(ops.maximum(discriminant, 0.0))
+    complex_pair = ops.sqrt(ops.maximum(a * d - b * c, 0.0))
+    return ops.where(discriminant >= 0.0, real, complex_pair)
+
+
+def spectral_radius_3(m: tuple[Any, ...], ops: Ops) -> Any:
+    """max |λ| of the 3x3 matrix with row-major entries ``m`` (nine numbers or arrays).
+
+    With s = tr M / 3 and S = M - s I (trace 0), λ = t + s where t³ + p t + q = 0,
+    p = the sum of S's principal 2x2 minors and q = -det S. One real root and a complex
+    pair when D = (q/2)² + (p/3)³ > 0 (Cardano), three real roots otherwise (Viète).
+    """
+    a, b, c, d, e, f, g, h, i = m
+    shift = (a + e + i) * (1.0 / 3.0)
+    a, e, i = a - shift, e - shift, i - shift
+    minor_ei, minor_fh = e * i, f * h
+    p = (a * e - b * d) + (a * i - c * g) + (minor_ei - minor_fh)
+    q = -(a * (minor_ei - minor_fh) - b * (d * i - f * g) + c * (d * h - e * g))
+    half_q = 0.5 * q
+    third_p = p * (1.0 / 3.0)
+    discriminant = half_q * half_q + third_p * third_p * third_p
+    one_real = discriminant > 0.0
+    # Cardano: u = cbrt(-q/2 - sign(q) sqrt(D)) has no cancellation; v = -p / (3 u).
+    root = ops.sqrt(ops.maximum(discriminant, 0.0))
+    u = ops.cbrt(ops.where(half_q >= 0.0, -half_q - root, -half_q + root))
+    safe_u = ops.where(u == 0.0, 1.0, u)
+    v = ops.where(u == 0.0, 0.0, -third_p / safe_u)
+    real_part = -(u + v) * 0.5 + shift
+    imaginary_part = _SQRT3_HALF * (u - v)
+    cardano = ops.maximum(ops.absolute(u + v + shift), ops.hypot(real_part, imaginary_part))
+    # Viète: p <= 0 here; p = 0 only with q = 0, a triple root t = 0 (and a |p| below
+    # _FLAT spreads the roots by less than 1e-100: rho is |s| to every digit).
+    flat = p >= -_FLAT
+    safe_p = ops.where(one_real | flat, -1.0, p)
+    radius = 2.0 * ops.sqrt(-safe_p * (1.0 / 3.0))
+    angle = ops.arccos(ops.maximum(-1.0, ops.minimum(1.0, 3.0 * q / (safe_p * radius)))) * (1.0 / 3.0)
+    roots = [radius * ops.cos(angle - k * _TWO_PI_THIRDS) + shift for k in range(3)]
+    viete = ops.maximum(ops.maximum(ops.absolute(roots[0]), ops.absolute(roots[1])), ops.absolute(roots[2]))
+    viete = ops.where(flat, ops.absolute(shift), viete)
+    return ops.where(one_real, cardano, viete)

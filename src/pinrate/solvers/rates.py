@@ -1,0 +1,101 @@
+"""Joint rates from a sensor-frame twist at a configuration: the algorithms of the
+registry applied to a robot's partitioned Jacobian (the contract's ``pinrate.joint_rates``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..checks import check_vector
+from ..errors import SingularBlockError
+from ..kinematics.manipulator import Robot
+from ..kinematics.partition import Partition, PartitionIndex, split_blocks
+from . import closed_form, reference
+from .registry import REGISTRY, check_algorithm
+
+
+def partition_rates(
+    J: np.ndarray,
+    index: PartitionIndex,
+    twist: np.ndarray,
+    algorithm: str,
+    parts: closed_form.Blocks | None = None,
+) -> np.ndarray:
+    """Joint rates (nv,) from a sensor-frame Jacobian (6, nv) and a twist in partition order.
+
+    Joints outside the partition get rate 0. ``parts`` may hold the blocks as nested lists
+    already taken from J (when ``index.small``). Raises SingularBlockError (without q: the
+    caller adds it) when a block algorithm meets a singular square block.
+    """
+    entry = REGISTRY[algorithm]
+    if index.small and entry.closed_form is not None:
+        if parts is None:
+            parts = closed_form.blocks(J, index.selectors)
+        solved = closed_form.block_rates(entry.closed_form, parts, twist)
+        if index.all_columns:
+            return np.array(solved)
+        rates = np.zeros(J.shape[1])
+        rates[index.columns] = solved
+        return rates
+    rates = np.zeros(J.shape[1])
+    if index.columns.size == 0:
+        return rates
+    reduced = J if index.all_rows and index.all_columns else J[np.ix_(index.rows, index.columns)]
+    if entry.whole is not None:
+        rates[index.columns] = entry.whole(reduced, twist)
+    else:
+        assert entry.blocks is not None
+        blocks = split_blocks(reduced, index.m, index.arm_columns.size)
+        arm, wrist = entry.blocks(*blocks, twist[: index.m], twist[index.m :])
+        rates[index.arm_columns] = arm
+        rates[index.wrist_columns] = wrist
+    return rates
+
+
+def partition_spectral_radius(J: np.ndarray, index: PartitionIndex, parts: closed_form.Blocks | None = None) -> float:
+    """ρ of the smaller of G and H (eq. 32, 50) from a sensor-frame Jacobian (6, nv); inf
+    where A or W is singular. Closed form on ``parts`` when given (square blocks <= 3)."""
+    try:
+        if parts is not None:
+            return closed_form.spectral_radius(parts)
+        reduced = J[np.ix_(index.rows, index.columns)]
+        G, H = reference.convergence_matrices(*split_blocks(reduced, index.m, index.arm_columns.size))
+        eigenvalues = reference.eigenvalues(G if G.shape[0] <= H.shape[0] else H)
+        return float(np.max(np.abs(eigenvalues))) if eigenvalues.size else 0.0
+    except SingularBlockError:
+        return math.inf
+
+
+def joint_rates(
+    robot: Robot, q: object, twist: object, *, algorithm: str = "mca1", partition: Partition | None = None
+) -> np.ndarray:
+    """Joint rates (nv,) that realise a sensor-frame twist command at configuration q.
+
+    Args:
+        robot: the robot (its tip and sensor frames fix what the twist means).
+        q: configuration (nq,).
+        twist: the controlled components in partition order, linear then angular (m + k,),
+            in the sensor frame's axes: m/s and rad/s.
+        algorithm: a name of :data:`pinrate.ALGORITHMS`: "exact", "schur" (eq. 20), "mca1"
+            (eq. 24-25), "mca2" (eq. 44-45), "mca3" (eq. 51-52) or "dls".
+        partition: which joints and rows take part; None means ``Partition.auto(robot)``.
+
+    Returns:
+        Joint rates in velocity-vector order (rad/s or m/s); joints outside the partition get 0.
+
+    Raises:
+        InputError: q or twist of the wrong length or with NaN/inf; unknown algorithm or
+            partition joints.
+        SingularBlockError: an MCA or schur meets a singular square block (never NaN/inf).
+    """
+    algorithm = check_algorithm(algorithm)
+    q = robot.check_q(q)
+    partition = Partition.auto(robot) if partition is None else partition
+    index = partition.resolve(robot)
+    twist = check_vector(twist, index.rows.size, "twist (linear then angular components of the partition)")
+    jacobian = robot.jacobian_unchecked(q)
+    try:
+        return partition_rates(jacobian, index, twist, algorithm)
+    except SingularBlockError as error:
+        raise error.at(robot.name, q, f" with {algorithm}") from None

@@ -1,0 +1,63 @@
+"""The convergence Theorem of Shoham & Koren (1987, §4) at one configuration.
+
+With P = U A^-1 (k x m) and Q = B W^-1 (m x k),
+
+    G = P Q = U A^-1 B W^-1   (k x k, eq. 32)      H = Q P = B W^-1 U A^-1   (m x m, eq. 50)
+
+The error of MCA1 obeys e(i+1) = β G e(i) + G Ω(i) (eq. 40); freezing G along the
+trajectory, it dies out when every eigenvalue of G lies inside the unit circle (Result 1);
+MCA2 needs the same of H (Result 2). PQ and QP share their non-zero eigenvalues, so the
+smaller of G and H decides for all three algorithms (the Theorem).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import SingularBlockError
+from ..kinematics.manipulator import Robot
+from ..kinematics.partition import Partition
+from ..solvers import reference
+
+
+@dataclass(frozen=True)
+class Convergence:
+    """The Theorem's test at one configuration.
+
+    Attributes:
+        G: U A^-1 B W^-1 (k x k, eq. 32), H: B W^-1 U A^-1 (m x m, eq. 50): dimensionless
+            maps of the twist error (in the sensor frame's axes).
+        eigenvalues: of the smaller of G and H (they share their non-zero eigenvalues).
+        spectral_radius: the largest |eigenvalue| (0.0 when there is none).
+        converges: spectral_radius < 1, the Theorem's condition at q.
+    """
+
+    G: np.ndarray
+    H: np.ndarray
+    eigenvalues: np.ndarray
+    spectral_radius: float
+    converges: bool
+
+
+def convergence_from_blocks(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> Convergence:
+    """The Theorem's test from the blocks of eq. 19 (numpy reference: LAPACK eigenvalues)."""
+    G, H = reference.convergence_matrices(A, B, U, W)
+    eigenvalues = reference.eigenvalues(G if G.shape[0] <= H.shape[0] else H)
+    radius = float(np.max(np.abs(eigenvalues))) if eigenvalues.size else 0.0
+    return Convergence(G=G, H=H, eigenvalues=eigenvalues, spectral_radius=radius, converges=radius < 1.0)
+
+
+def convergence(robot: Robot, q: object, *, partition: Partition | None = None) -> Convergence:
+    """The Theorem's test at configuration q: G, H, eigenvalues of the smaller, ρ, ρ < 1.
+
+    Raises:
+        SingularBlockError: A or W is square and singular at q (G and H do not exist).
+    """
+    q = robot.check_q(q)
+    partition = Partition.auto(robot) if partition is None else partition
+    try:
+        return convergence_from_blocks(*partition.blocks(robot, robot.kinematics(q)[0]))
+    except SingularBlockError as error:
+        raise error.at(robot.name, q, " (G and H are undefined there)") from None

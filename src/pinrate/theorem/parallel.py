@@ -1,0 +1,95 @@
+"""Running chunks of work on one process, on worker processes, or on a Dask cluster.
+
+Work-volume tests are embarrassingly parallel: configurations are drawn once in the caller
+(so the result does not depend on how the work is split), cut into chunks, and each chunk
+is evaluated where it is sent. A robot travels as its
+:class:`~pinrate.kinematics.RobotSpec` (URDF text and frames) and is rebuilt once per
+worker process (:func:`pinrate.kinematics.urdf.robot_from_spec`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Any, TypeVar
+
+from tqdm.auto import tqdm
+
+from ..checks import check_count
+from ..errors import InputError
+
+T = TypeVar("T")
+
+
+def _progress(total: int, description: str, enabled: bool | None) -> Any:
+    # enabled=None: tqdm shows the bar only on a terminal.
+    return tqdm(
+        total=total, desc=description, unit="chunk", disable=None if enabled is None else not enabled, leave=False
+    )
+
+
+def check_workers(workers: object) -> int:
+    """Worker processes to use: a positive integer, at most the CPU count."""
+    count = check_count(workers, "workers", minimum=1)
+    return min(count, os.cpu_count() or 1) if count > 1 else 1
+
+
+def map_chunks(
+    function: Callable[..., T],
+    chunks: Sequence[Any],
+    *arguments: Any,
+    workers: int = 1,
+    scheduler: object = None,
+    progress: bool | None = None,
+    description: str = "",
+) -> list[T]:
+    """``[function(*arguments, chunk) for chunk in chunks]``, in order, wherever asked.
+
+    Args:
+        function: a module-level (picklable) function.
+        workers: processes on this machine (1: in this process).
+        scheduler: a Dask scheduler address (``"tcp://host:8786"``), a
+            ``distributed.Client``, or a cluster object with a ``scheduler_address``; takes
+            precedence over ``workers``. Needs the optional ``dask`` extra.
+        progress: show a progress bar (None: only on a terminal).
+    """
+    workers = check_workers(workers)
+    results: list[Any] = [None] * len(chunks)
+    with _progress(len(chunks), description, progress) as bar:
+        if scheduler is not None:
+            client, owned = _dask_client(scheduler)
+            try:
+                futures = {client.submit(function, *arguments, chunk, pure=False): i for i, chunk in enumerate(chunks)}
+                from distributed import as_completed as dask_completed
+
+                for future in dask_completed(futures):
+                    results[futures[future]] = future.result()
+                    bar.update(1)
+            finally:
+                if owned:
+                    client.close()
+        elif workers > 1 and len(chunks) > 1:
+            with ProcessPoolExecutor(max_workers=workers) as pool:
+                futures = {pool.submit(function, *arguments, chunk): i for i, chunk in enumerate(chunks)}
+                for future in as_completed(futures):
+                    results[futures[future]] = future.result()
+                    bar.update(1)
+        else:
+            for i, chunk in enumerate(chunks):
+                results[i] = function(*arguments, chunk)
+                bar.update(1)
+    return results
+
+
+def _dask_client(scheduler: object) -> tuple[Any, bool]:
+    try:
+        from distributed import Client
+    except ImportError:
+        raise InputError("a Dask scheduler needs the optional extra: pip install 'pinrate[dask]'") from None
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    address = getattr(scheduler, "scheduler_address", scheduler)
+    if not isinstance(address, str):
+        raise InputError(f"scheduler must be an address, a distributed.Client or a cluster, not {scheduler!r}")
+    return Client(address), True

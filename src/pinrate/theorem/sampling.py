@@ -1,0 +1,149 @@
+"""The Theorem over the work volume: ρ at many configurations, sampled or given.
+
+Jacobians come from Pinocchio one configuration at a time; the block algebra and the
+eigenvalues run batched in closed form (:mod:`pinrate.solvers.batched`), in chunks that
+can go to worker processes or a Dask cluster (:mod:`.parallel`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..checks import RngLike, check_count
+from ..errors import InputError
+from ..kinematics.manipulator import Robot, RobotSpec
+from ..kinematics.partition import Partition
+from ..kinematics.urdf import robot_from_spec
+from ..solvers import batched
+from .parallel import map_chunks
+
+_Z95 = 1.959963984540054  # two-sided 95 % normal quantile
+
+
+@dataclass(frozen=True)
+class ConvergenceSample:
+    """The Theorem's test over configurations drawn uniformly in the joint limits."""
+
+    q: np.ndarray
+    spectral_radius: np.ndarray
+    partition: Partition
+
+    @property
+    def fraction(self) -> float:
+        """Share of the samples with spectral radius < 1."""
+        return float(np.mean(self.spectral_radius < 1.0)) if self.spectral_radius.size else math.nan
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """95 % Wilson score confidence interval of :attr:`fraction`."""
+        return wilson_interval(int(np.sum(self.spectral_radius < 1.0)), int(self.spectral_radius.size))
+
+
+def wilson_interval(successes: int, trials: int, z: float = _Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion (good near 0 and 1, unlike Wald's)."""
+    if trials == 0:
+        return (0.0, 1.0)
+    p = successes / trials
+    denominator = 1.0 + z * z / trials
+    centre = (p + z * z / (2 * trials)) / denominator
+    half = z * math.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / denominator
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Partition) -> np.ndarray:
+    """Sensor-frame Jacobians restricted to the partition, a stack (N, m + k, n)."""
+    index = partition.resolve(robot)
+    if configurations.shape[0] == 0:
+        return np.zeros((0, index.rows.size, index.columns.size))
+    if robot.sensor_id == robot.tip_id:
+        # The hot loop: Robot.jacobian_unchecked's sensor-at-tip branch, inlined (one Pinocchio
+        # call per q, collected in a list, stacked once): 15 % faster than calling the method.
+        compute, model, data, tip, local = pin.computeFrameJacobian, robot.model, robot.data, robot.tip_id, pin.LOCAL
+        full = np.stack([compute(model, data, q, tip, local) for q in list(configurations)])
+    else:
+        full = np.stack([robot.jacobian_unchecked(q) for q in list(configurations)])
+    if index.all_rows and index.all_columns:
+        return full
+    return full[:, index.rows][:, :, index.columns]
+
+
+CHUNK = 20_000
+"""Configurations per chunk of work in :func:`sample_convergence`."""
+
+
+def _spectral_radius_of_chunk(spec: RobotSpec, partition: Partition, configurations: np.ndarray) -> np.ndarray:
+    """ρ at each configuration of one chunk (N, nq), runnable in any process."""
+    return _spectral_radius(robot_from_spec(spec), partition, configurations)
+
+
+def _spectral_radius(robot: Robot, partition: Partition, configurations: np.ndarray) -> np.ndarray:
+    """ρ at each configuration (N, nq) of ``robot``: Pinocchio Jacobians, batched block algebra."""
+    index = partition.resolve(robot)
+    jacobians = partition_jacobians(robot, configurations, partition)
+    m, n_arm = index.m, index.arm_columns.size
+    return batched.spectral_radius(
+        jacobians[:, :m, :n_arm], jacobians[:, :m, n_arm:], jacobians[:, m:, :n_arm], jacobians[:, m:, n_arm:]
+    )
+
+
+def spectral_radius_at(
+    robot: Robot,
+    configurations: np.ndarray,
+    *,
+    partition: Partition | None = None,
+    workers: int = 1,
+    scheduler: object = None,
+    progress: bool | None = None,
+) -> np.ndarray:
+    """ρ of the smaller of G and H at each configuration (N, nq), in chunks, in parallel if asked."""
+    partition = Partition.auto(robot) if partition is None else partition
+    partition.resolve(robot)  # unknown joints fail here, not in a worker
+    configurations = np.asarray(configurations, dtype=float)
+    if configurations.ndim != 2 or configurations.shape[1] != robot.nq:
+        raise InputError(f"configurations must have shape (N, {robot.nq}), got {configurations.shape}")
+    if workers == 1 and scheduler is None and configurations.shape[0] <= CHUNK:
+        return _spectral_radius(robot, partition, configurations)
+    chunks = [configurations[start : start + CHUNK] for start in range(0, configurations.shape[0], CHUNK)]
+    parts = map_chunks(
+        _spectral_radius_of_chunk,
+        chunks,
+        robot.spec(),
+        partition,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        description=f"{robot.name}: rho",
+    )
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
+def sample_convergence(
+    robot: Robot,
+    samples: int,
+    *,
+    partition: Partition | None = None,
+    rng: RngLike = None,
+    workers: int = 1,
+    scheduler: object = None,
+    progress: bool | None = None,
+) -> ConvergenceSample:
+    """The Theorem's test at ``samples`` configurations drawn uniformly in the joint limits.
+
+    Only the partition's joints are drawn (others stay at neutral; joints without limits in
+    [-pi, pi]). Jacobians come from Pinocchio one configuration at a time; the block algebra
+    and the eigenvalues are batched in closed form (:mod:`pinrate.solvers.batched`). ``workers``
+    spreads the chunks over processes, ``scheduler`` over a Dask cluster (the result is
+    the same either way: configurations are drawn here first). ``progress``: a bar (None:
+    on a terminal only).
+    """
+    samples = check_count(samples, "samples", minimum=1)
+    partition = Partition.auto(robot) if partition is None else partition
+    configurations = robot.sample_configurations(int(samples), rng, joints=partition.joints)
+    radii = spectral_radius_at(
+        robot, configurations, partition=partition, workers=workers, scheduler=scheduler, progress=progress
+    )
+    return ConvergenceSample(q=configurations, spectral_radius=radii, partition=partition)

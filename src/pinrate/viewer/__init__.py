@@ -1,0 +1,8 @@
+"""The browser view: a robot, its frames and its servo path in Meshcat (the only package
+that imports meshcat)."""
+
+from ..errors import ViewerError
+from .scene import ROOT, Viewer, path_colours, triad
+from .server import MeshcatServer
+
+__all__ = ["ROOT", "MeshcatServer", "Viewer", "ViewerError", "path_colours", "triad"]

@@ -1,0 +1,227 @@
+"""The browser view: a robot, its frames and its servo path in Meshcat.
+
+This package is the only one that imports meshcat; the rest of pinrate works without a
+display. The viewer keeps its own ``pin.Data``, so drawing never disturbs a control loop
+that runs on the robot's.
+
+    viewer = Viewer(robot)            # starts a Meshcat server on 127.0.0.1, prints nothing
+    print(viewer.url)                 # open it in a browser
+    viewer.show(q)
+    viewer.play(trajectory, target=pose)
+    viewer.save_html("run.html")      # a standalone page that replays the whole run offline
+
+Scene layout (paths under Meshcat's ``/meshcat`` root, Z up):
+``pinrate/visuals/<geometry>`` the robot's visual geometries (Pinocchio's MeshcatVisualizer),
+``markers/target``, ``markers/tcp``, ``markers/sensor`` triads, ``paths/<k>`` the TCP paths,
+coloured by the spectral radius of G along the way (green ρ < 1, red ρ >= 1).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import time
+import webbrowser
+from collections.abc import Sequence
+from pathlib import Path
+
+import meshcat
+import meshcat.animation
+import meshcat.geometry as g
+import numpy as np
+import pinocchio as pin
+from pinocchio.visualize import MeshcatVisualizer
+
+from ..checks import as_pose
+from ..control.trajectory import Trajectory
+from ..kinematics.manipulator import Robot
+from .server import MeshcatServer
+
+ROOT = "pinrate"
+CONVERGING_COLOUR = 0x2CA02C  # ρ < 1
+DIVERGING_COLOUR = 0xD62728  # ρ >= 1
+TARGET_COLOUR = 0xFF7F0E
+
+
+def triad(length: float = 0.1, width: float = 3.0, opacity: float = 1.0) -> tuple[g.LineSegments]:
+    """A frame triad: x red, y green, z blue."""
+    vertices = np.array([[0, length, 0, 0, 0, 0], [0, 0, 0, length, 0, 0], [0, 0, 0, 0, 0, length]], dtype=np.float32)
+    colours = np.array([[1, 1, 0, 0, 0, 0], [0, 0.6, 1, 0.6, 0, 0.6], [0, 0, 0, 0, 1, 1]], dtype=np.float32)
+    return (
+        g.LineSegments(
+            g.PointsGeometry(vertices, colours),
+            g.LineBasicMaterial(vertexColors=True, linewidth=width, opacity=opacity),
+        ),
+    )
+
+
+def path_colours(spectral_radius: np.ndarray) -> np.ndarray:
+    """RGB (3, N) per path point: green where ρ < 1, red where ρ >= 1 (or undefined)."""
+    converging = np.asarray(spectral_radius) < 1.0
+    green = np.array([0x2C, 0xA0, 0x2C]) / 255.0
+    red = np.array([0xD6, 0x27, 0x28]) / 255.0
+    return np.where(converging[None, :], green[:, None], red[:, None]).astype(np.float32)
+
+
+class Viewer:
+    """A robot in Meshcat, with markers, paths and a recorder for a standalone HTML replay.
+
+    Args:
+        robot: what to draw (its visual meshes, or nothing where they are missing).
+        host: address the server binds to (127.0.0.1: this machine only).
+        zmq_url: connect to a running Meshcat server instead of starting one.
+        open_browser: open the URL in the default browser.
+    """
+
+    def __init__(
+        self, robot: Robot, *, host: str = "127.0.0.1", zmq_url: str | None = None, open_browser: bool = False
+    ) -> None:
+        self.robot = robot
+        self.data = robot.model.createData()  # the viewer's own: a control loop keeps robot.data
+        self.server = MeshcatServer(host) if zmq_url is None else None
+        with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints the URL itself; we report it
+            self.meshcat = meshcat.Visualizer(zmq_url=self.server.zmq_url if self.server else zmq_url)
+            self.url = self.server.web_url if self.server else self.meshcat.url()
+            self._visualizer = MeshcatVisualizer(robot.model, pin.GeometryModel(), robot.visual_model)
+            self._visualizer.initViewer(viewer=self.meshcat)
+            self._visualizer.loadViewerModel(rootNodeName=ROOT)
+        self._geometry_data = robot.visual_model.createData()
+        self._frames: list[dict[str, np.ndarray]] = []  # recorded transforms, for save_html
+        self._paths = 0
+        self.meshcat["markers/tcp"].set_object(*triad(0.08))
+        self.meshcat["markers/sensor"].set_object(*triad(0.05, opacity=0.6))
+        reach = max(0.3, float(np.linalg.norm(self.tip_position(robot.home()))))
+        self.set_camera(np.array([1.2, -1.5, 0.55]) * reach)
+        if open_browser:
+            webbrowser.open(self.url, new=2)
+
+    # ------------------------------------------------------------------ drawing
+    def set_camera(self, position: Sequence[float] | np.ndarray) -> None:
+        """Put the camera at ``position`` (world frame, Z up), looking at the origin.
+
+        meshcat 0.3.2's camera helpers in Pinocchio fail (no ``set_cam_pos``), so this sets
+        the ``position`` of ``/Cameras/default/rotated/<object>``, whose frame is Y up.
+        """
+        x, y, z = (float(v) for v in position)
+        self.meshcat["/Cameras/default"].set_transform(np.eye(4))
+        self.meshcat["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
+
+    def node_transforms(self, q: np.ndarray) -> dict[str, np.ndarray]:
+        """Meshcat path -> 4x4 transform of every visual geometry and the tip/sensor markers at q."""
+        model, data = self.robot.model, self.data
+        q = self.robot.check_q(q)
+        pin.forwardKinematics(model, data, q)
+        pin.updateGeometryPlacements(model, data, self.robot.visual_model, self._geometry_data)
+        transforms = {}
+        for index, geometry in enumerate(self.robot.visual_model.geometryObjects):
+            scale = np.diag(np.concatenate([np.asarray(geometry.meshScale).ravel(), [1.0]]))
+            name = self._visualizer.getViewerNodeName(geometry, pin.GeometryType.VISUAL)
+            transforms[name] = self._geometry_data.oMg[index].homogeneous @ scale
+        transforms["markers/tcp"] = np.array(pin.updateFramePlacement(model, data, self.robot.tip_id).homogeneous)
+        transforms["markers/sensor"] = np.array(pin.updateFramePlacement(model, data, self.robot.sensor_id).homogeneous)
+        return transforms
+
+    def tip_position(self, q: np.ndarray) -> np.ndarray:
+        """The TCP position (3,) in the world at q (metres), on the viewer's own data."""
+        pin.forwardKinematics(self.robot.model, self.data, q)
+        return np.array(pin.updateFramePlacement(self.robot.model, self.data, self.robot.tip_id).translation)
+
+    def show(self, q: np.ndarray, *, record: bool = True) -> None:
+        """Draw the robot at q (and remember the frame for :meth:`save_html`)."""
+        transforms = self.node_transforms(q)
+        for name, transform in transforms.items():
+            self.meshcat[name].set_transform(transform)
+        if record:
+            self._frames.append(transforms)
+
+    def set_frame(self, name: str, pose: object, *, length: float = 0.1) -> None:
+        """A triad at ``pose`` (4x4 or SE3, world frame) under ``markers/<name>``."""
+        self.meshcat[f"markers/{name}"].set_object(*triad(length, width=4.0))
+        self.meshcat[f"markers/{name}"].set_transform(np.array(as_pose(pose).homogeneous))
+
+    def set_target(self, pose: object) -> None:
+        """The target: a triad and a small sphere at the target pose."""
+        self.set_frame("target", pose, length=0.12)
+        self.meshcat["markers/target/ball"].set_object(g.Sphere(0.012), g.MeshLambertMaterial(color=TARGET_COLOUR))
+
+    def add_path(self, points: np.ndarray, spectral_radius: Sequence[float] | np.ndarray) -> str:
+        """A polyline through ``points`` (N, 3), each segment coloured by ρ at its start."""
+        points = np.asarray(points, dtype=np.float32)
+        radius = np.asarray(spectral_radius, dtype=float)
+        if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] != radius.shape[0]:
+            raise ValueError("points must be (N, 3) with one spectral radius per point")
+        name = f"paths/{self._paths}"
+        self._paths += 1
+        if points.shape[0] >= 2:
+            starts, ends = points[:-1], points[1:]
+            vertices = np.empty((2 * starts.shape[0], 3), dtype=np.float32)
+            vertices[0::2], vertices[1::2] = starts, ends
+            colours = np.repeat(path_colours(radius[:-1]), 2, axis=1)
+            self.meshcat[name].set_object(
+                g.LineSegments(
+                    g.PointsGeometry(vertices.T, colours), g.LineBasicMaterial(vertexColors=True, linewidth=4)
+                )
+            )
+        return name
+
+    def play(
+        self,
+        trajectory: Trajectory,
+        *,
+        target: object | None = None,
+        speed: float = 1.0,
+        realtime: bool = True,
+        fps: float = 30.0,
+    ) -> None:
+        """Animate a servo run: the path coloured by ρ, then the robot along it at ``speed``× real time."""
+        if target is not None:
+            self.set_target(target)
+        tips = np.array([self.tip_position(q) for q in trajectory.q])
+        self.add_path(tips, trajectory.spectral_radius)
+        stride = max(1, round(1.0 / (fps * trajectory.dt)))
+        indices = list(range(0, trajectory.q.shape[0], stride))
+        if indices[-1] != trajectory.q.shape[0] - 1:
+            indices.append(trajectory.q.shape[0] - 1)
+        period = stride * trajectory.dt / max(speed, 1e-9)
+        for index in indices:
+            started = time.monotonic()
+            self.show(trajectory.q[index])
+            if realtime:
+                time.sleep(max(0.0, period - (time.monotonic() - started)))
+
+    # ------------------------------------------------------------------ recording
+    @property
+    def recorded_frames(self) -> int:
+        return len(self._frames)
+
+    def animation(self, fps: float = 30.0) -> meshcat.animation.Animation:
+        """The recorded frames as a Meshcat animation (one keyframe per :meth:`show`)."""
+        animation = meshcat.animation.Animation(default_framerate=fps)
+        for index, transforms in enumerate(self._frames):
+            with animation.at_frame(self.meshcat, index) as frame:
+                for name, transform in transforms.items():
+                    frame[name].set_transform(transform)
+        return animation
+
+    def save_html(self, path: str | os.PathLike[str], *, fps: float = 30.0, loop: bool = True) -> Path:
+        """A standalone HTML page of the scene that replays every recorded frame, offline."""
+        if self._frames:
+            self.meshcat.set_animation(self.animation(fps), play=True, repetitions=10**9 if loop else 1)
+        target = Path(path)
+        target.write_text(self.meshcat.static_html(), encoding="utf-8")
+        return target
+
+    def close(self) -> None:
+        """Stop the Meshcat server this viewer started."""
+        if self.server is not None:
+            self.server.close()
+
+    def __enter__(self) -> Viewer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+__all__ = ["Viewer", "path_colours", "triad"]

@@ -1,0 +1,67 @@
+"""A Meshcat server in its own process: bound to one address, stopped with its parent."""
+
+from __future__ import annotations
+
+import atexit
+import os
+import subprocess
+import sys
+import time
+
+from ..errors import ViewerError
+
+SERVER_START_TIMEOUT = 30.0
+"""Seconds the server process has to report its URLs."""
+
+
+class MeshcatServer:
+    """A Meshcat server subprocess bound to ``host``; closed on :meth:`close`, on exit, or
+    by itself when this process dies (it watches its parent)."""
+
+    def __init__(self, host: str = "127.0.0.1") -> None:
+        command = [
+            sys.executable,
+            "-u",
+            "-m",
+            "pinrate.viewer.meshcat_process",
+            "--host",
+            host,
+            "--parent",
+            str(os.getpid()),
+        ]
+        self.process = subprocess.Popen(
+            command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
+        )  # Ctrl-C reaches us, we close it
+        atexit.register(self.close)
+        self.zmq_url = self._read_line("zmq_url=")
+        self.web_url = self._read_line("web_url=")
+
+    def _read_line(self, prefix: str) -> str:
+        deadline = time.monotonic() + SERVER_START_TIMEOUT
+        assert self.process.stdout is not None
+        while time.monotonic() < deadline:
+            line = self.process.stdout.readline().decode("utf-8", "replace").strip()
+            if line.startswith(prefix):
+                return line[len(prefix) :]
+            if not line and self.process.poll() is not None:
+                error = self.process.stderr.read().decode("utf-8", "replace") if self.process.stderr else ""
+                raise ViewerError(f"the Meshcat server exited with code {self.process.returncode}: {error[-500:]}")
+        self.close()
+        raise ViewerError(f"the Meshcat server did not report {prefix[:-1]} within {SERVER_START_TIMEOUT:g} s")
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    def close(self) -> None:
+        """Stop the server and free its ports (idempotent)."""
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        for stream in (self.process.stdout, self.process.stderr):
+            if stream is not None:
+                stream.close()

@@ -1,0 +1,54 @@
+"""The command line: `pinrate list` and `pinrate demo`."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from pinrate.cli import main
+from pinrate.robots import ROBOT_NAMES
+
+
+def test_list_prints_every_loadable_name(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    for name in (*ROBOT_NAMES, "ur3", "ur5", "ur10", "panda", "z1", "xarm7", "so100", "so101", "kinova"):
+        assert name in out
+
+
+def test_demo_ur5_converges_and_summarises(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo", "ur5", "--no-viewer"]) == 0
+    out = capsys.readouterr().out
+    assert "converged  yes" in out
+    for field in ("partition", "algorithm  mca1", "steps", "errors", "rho(G,H)"):
+        assert field in out
+
+
+def test_demo_with_explicit_target(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(
+        ["demo", "scara", "--no-viewer", "--algorithm", "mca2", "--target", "0.9", "0.3", "-0.1", "0", "0", "0.4"]
+    )
+    out = capsys.readouterr().out
+    assert "algorithm  mca2" in out
+    assert code in (0, 1)
+
+
+def test_demo_bad_robot_is_a_clear_error(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo", "ur55"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown robot name 'ur55'" in err and "ur5" in err
+
+
+def test_console_script_runs() -> None:
+    result = subprocess.run([sys.executable, "-m", "pinrate.cli", "list"], capture_output=True, text=True, check=False)
+    assert result.returncode == 0 and "ur5" in result.stdout
+
+
+def test_demo_reports_an_automatic_tip(capsys: pytest.CaptureFixture[str]) -> None:
+    from support import DATA
+
+    main(["demo", str(DATA / "mixed_joints.urdf"), "--no-viewer", "--max-steps", "5"])
+    out = capsys.readouterr().out
+    assert "tip        tool (chosen: the deepest frame at the end of the longest chain" in out

@@ -1,0 +1,183 @@
+"""The closed-loop servo: sensor commands from the pose error, integration on the manifold."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pinrate
+from pinrate import Partition
+from pinrate.kinematics.targets import nearby_target
+
+
+def rotation_angle(a: np.ndarray, b: np.ndarray) -> float:
+    """Angle of the rotation between two rotation matrices, from the trace."""
+    return math.acos(max(-1.0, min(1.0, (np.trace(a.T @ b) - 1) / 2)))
+
+
+@pytest.mark.parametrize("algorithm", ["exact", "dls", "mca1", "mca2", "mca3", "schur"])
+def test_ur5_reaches_a_target(ur5: pinrate.Robot, algorithm: str) -> None:
+    _, target = nearby_target(ur5, Partition.auto(ur5), seed=4)
+    trajectory = pinrate.servo(ur5, ur5.home(), target, algorithm=algorithm)
+    assert trajectory.converged, trajectory.reason
+    final = ur5.pose(trajectory.q[-1])
+    assert np.linalg.norm(final[:3, 3] - target[:3, 3]) < 1e-4
+    assert rotation_angle(final[:3, :3], target[:3, :3]) < 1e-4
+    n = trajectory.q.shape[0]
+    assert trajectory.position_error.shape == trajectory.orientation_error.shape == (n,)
+    assert trajectory.spectral_radius.shape == (n,) and len(trajectory.status) == n
+    assert trajectory.joint_rates.shape == (n - 1, ur5.nv)
+    np.testing.assert_array_equal(trajectory.q[0], ur5.home())
+
+
+def test_errors_are_measured_at_each_q(ur5: pinrate.Robot) -> None:
+    _, target = nearby_target(ur5, Partition.auto(ur5), seed=1)
+    trajectory = pinrate.servo(ur5, ur5.home(), target, max_steps=30)
+    for i in (0, 10, 30):
+        pose = ur5.pose(trajectory.q[i])
+        assert trajectory.position_error[i] == pytest.approx(np.linalg.norm(pose[:3, 3] - target[:3, 3]))
+        assert trajectory.orientation_error[i] == pytest.approx(rotation_angle(pose[:3, :3], target[:3, :3]), abs=1e-9)
+        assert trajectory.spectral_radius[i] == pytest.approx(pinrate.convergence(ur5, trajectory.q[i]).spectral_radius)
+    assert not trajectory.converged and trajectory.reason.startswith("max_steps")
+
+
+def test_se3_target_is_accepted(ur5: pinrate.Robot) -> None:
+    _, target = nearby_target(ur5, Partition.auto(ur5), seed=2)
+    as_matrix = pinrate.servo(ur5, ur5.home(), target, max_steps=50)
+    as_se3 = pinrate.servo(ur5, ur5.home(), pin.SE3(target), max_steps=50)
+    np.testing.assert_allclose(as_matrix.q, as_se3.q)
+
+
+def polar_pose(robot: pinrate.Robot, theta1: float, d2: float, theta3: float) -> np.ndarray:
+    return robot.pose(np.array([theta1, d2, theta3]))
+
+
+@pytest.mark.parametrize("algorithm", ["mca1", "mca2", "mca3"])
+def test_polar_with_d2_over_l_above_two_converges(algorithm: str) -> None:
+    # Eq. 58: with d2 / l > 2 everywhere, |G| < 1 everywhere and every MCA converges.
+    robot = pinrate.robots.planar_polar(l=0.2)
+    q0 = np.array([0.0, 0.6, 2.2])
+    target = polar_pose(robot, 0.6, 0.45, 3.0)
+    trajectory = pinrate.servo(robot, q0, target, algorithm=algorithm)
+    assert trajectory.converged, trajectory.reason
+    assert (trajectory.q[:, 1] > 2 * 0.2).all()
+    assert (trajectory.spectral_radius < 1).all()
+    np.testing.assert_allclose(robot.pose(trajectory.q[-1])[:2, 3], target[:2, 3], atol=1e-4)
+
+
+def test_polar_outside_eq_58_diverges_with_a_dead_beat_sensor() -> None:
+    # |G| > 1 and the sensor commanding the whole error each sample (gain dt = 1, eq. 40
+    # with beta = 1): the orientation error of MCA1 is multiplied by G each step.
+    robot = pinrate.robots.planar_polar(l=0.2)
+    q0 = np.array([0.0, 0.12, 2.9])
+    assert pinrate.convergence(robot, q0).spectral_radius > 1
+    target = polar_pose(robot, 0.0, 0.12, 2.95)
+    trajectory = pinrate.servo(
+        robot,
+        q0,
+        target,
+        algorithm="mca1",
+        dt=0.01,
+        gain=100.0,
+        max_linear_speed=math.inf,
+        max_angular_speed=math.inf,
+        max_steps=200,
+    )
+    assert not trajectory.converged
+    assert trajectory.reason.startswith("diverging")
+    assert trajectory.status[-1] == "diverging"
+
+
+def test_joint_limit_stops_the_run() -> None:
+    robot = pinrate.robots.planar_polar(l=0.2)
+    q0 = np.array([0.0, 0.6, 0.3])
+    # d2 = 1.3 lies past the 1.0 upper limit: the prismatic joint runs into it.
+    target = polar_pose(robot, 0.0, 1.3, 0.3)
+    trajectory = pinrate.servo(robot, q0, target, algorithm="exact")
+    assert not trajectory.converged
+    assert trajectory.reason.startswith("joint limit: d2 reached its upper limit")
+    assert trajectory.q[-1, 1] == pytest.approx(1.0)
+    assert trajectory.position_error.shape == (trajectory.q.shape[0],)
+
+
+def test_singular_block_stops_the_run() -> None:
+    robot = pinrate.robots.two_link_planar()
+    position_only = Partition(["theta1", "theta2"], [], linear="xy", angular="")
+    target = robot.pose(np.array([0.5, 1.0]))
+    trajectory = pinrate.servo(robot, np.array([0.0, 0.0]), target, partition=position_only)
+    assert trajectory.reason.startswith("singular") and not trajectory.converged
+    assert trajectory.spectral_radius[0] == math.inf
+
+
+def test_speed_saturation(ur5: pinrate.Robot) -> None:
+    _, target = nearby_target(ur5, Partition.auto(ur5), seed=3)
+    trajectory = pinrate.servo(
+        ur5,
+        ur5.home(),
+        target,
+        algorithm="exact",
+        max_steps=5,
+        gain=50.0,
+        max_linear_speed=0.1,
+        max_angular_speed=10.0,
+    )
+    assert trajectory.status[0] == "saturated"
+    # Exact rates realise the commanded twist: the TCP moves at most 0.1 m/s * dt per step.
+    steps = np.linalg.norm(np.diff([ur5.pose(q)[:3, 3] for q in trajectory.q], axis=0), axis=1)
+    assert steps.max() <= 0.1 * 0.01 * 1.01
+
+
+@pytest.mark.parametrize(
+    ("target", "match"),
+    [
+        (np.eye(3), "4x4"),
+        (np.full((4, 4), np.nan), "NaN"),
+        (np.diag([1.0, 1.0, 2.0, 1.0]), "rotation"),
+        ("home", "4x4"),
+    ],
+)
+def test_bad_targets(ur5: pinrate.Robot, target: object, match: str) -> None:
+    with pytest.raises(pinrate.InputError, match=match):
+        pinrate.servo(ur5, ur5.home(), target)
+
+
+@pytest.mark.parametrize(
+    ("keyword", "value"),
+    [
+        ("dt", 0.0),
+        ("dt", math.inf),
+        ("gain", -1.0),
+        ("tol", math.nan),
+        ("max_steps", -1),
+        ("gain", True),
+        ("max_linear_speed", 0.0),
+    ],
+)
+def test_bad_settings(ur5: pinrate.Robot, keyword: str, value: float) -> None:
+    with pytest.raises(pinrate.InputError, match=keyword):
+        pinrate.servo(ur5, ur5.home(), ur5.pose(ur5.home()), **{keyword: value})
+
+
+def test_bad_q0(ur5: pinrate.Robot) -> None:
+    with pytest.raises(pinrate.InputError, match="q"):
+        pinrate.servo(ur5, np.zeros(3), np.eye(4))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_pose_error_is_the_definition_in_sensor_axes(seed: int) -> None:
+    from pinrate.kinematics.spatial import pose_error
+
+    rng = np.random.default_rng(seed)
+    tip, sensor, target = (pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3)) for _ in range(3))
+    error = pose_error(tip, sensor, target)
+    R_s = sensor.rotation
+    np.testing.assert_allclose(error[:3], R_s.T @ (target.translation - tip.translation), atol=1e-12)
+    np.testing.assert_allclose(error[3:], R_s.T @ pin.log3(target.rotation @ tip.rotation.T), atol=1e-9)
+    # Sensor at the tip: the same definition with R_s = R_tip.
+    at_tip = pose_error(tip, tip, target)
+    R_tip = tip.rotation
+    np.testing.assert_allclose(at_tip[:3], R_tip.T @ (target.translation - tip.translation), atol=1e-12)
+    np.testing.assert_allclose(at_tip[3:], tip.rotation.T @ pin.log3(target.rotation @ tip.rotation.T), atol=1e-9)

@@ -1,0 +1,221 @@
+"""Loading robots and the sensor-frame Jacobian (Shoham & Koren eq. 1-8)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pinrate
+from pinrate.robots import EXAMPLE_ROBOTS
+from support import DATA, finite_difference_jacobian
+
+
+# ---------------------------------------------------------------------- loading
+@pytest.mark.parametrize("name", ["ur3", "ur5", "ur10", "panda", "z1", "xarm7", "so100", "so101", "kinova"])
+def test_every_catalog_robot_loads_with_its_tip(name: str) -> None:
+    robot = pinrate.load(name)
+    assert robot.tip == EXAMPLE_ROBOTS[name].tip
+    assert robot.sensor == robot.tip
+    home = robot.home()
+    assert home.shape == (robot.nq,)
+    lower, upper = robot.position_limits()
+    finite = np.isfinite(lower) & np.isfinite(upper)
+    assert np.all((home[finite] >= lower[finite] - 1e-12) & (home[finite] <= upper[finite] + 1e-12))
+
+
+def test_contract_tips(ur5: pinrate.Robot, panda: pinrate.Robot) -> None:
+    assert ur5.tip == "tool0"
+    assert panda.tip == "panda_hand_tcp"
+
+
+def test_ur5_home_is_not_singular_while_zero_is(ur5: pinrate.Robot) -> None:
+    # UR5's all-zero pose has a rank-deficient Jacobian (the contract's reason for a home pose).
+    assert np.linalg.matrix_rank(ur5.jacobian(np.zeros(6)), tol=1e-9) < 6
+    assert np.linalg.svd(ur5.jacobian(ur5.home()), compute_uv=False).min() > 1e-2
+
+
+def test_srdf_reference_configurations_are_exposed(panda: pinrate.Robot) -> None:
+    assert "default" in panda.reference_configurations
+    np.testing.assert_allclose(panda.reference_configurations["default"][3], -2.35619)
+    np.testing.assert_allclose(panda.home(), panda.reference_configurations["default"])
+
+
+def test_joint_names_follow_the_velocity_vector(panda: pinrate.Robot) -> None:
+    assert panda.joint_names[:7] == tuple(f"panda_joint{i}" for i in range(1, 8))
+    assert panda.nv == len(panda.joint_names) == 9
+
+
+def test_load_by_path_chooses_the_end_of_the_longest_chain() -> None:
+    robot = pinrate.load(DATA / "mixed_joints.urdf")
+    # yaw-slide-roll-pitch is the longest moving chain; its deepest frame is the tool link.
+    assert robot.tip == "tool"
+    assert robot.sensor == "tool"
+
+
+def test_load_by_str_path_and_pathlike_agree() -> None:
+    by_str = pinrate.load(str(DATA / "mixed_joints.urdf"), tip="tool")
+    by_path = pinrate.load(DATA / "mixed_joints.urdf", tip="tool")
+    q = by_str.random_configuration(3)
+    np.testing.assert_allclose(by_str.pose(q), by_path.pose(q))
+
+
+def test_a_name_that_is_link_and_joint_means_the_link() -> None:
+    robot = pinrate.load("so100", tip="gripper")
+    frame = robot.model.frames[robot.tip_id]
+    assert frame.type == pin.FrameType.BODY
+
+
+def test_continuous_joints_have_two_coordinates() -> None:
+    robot = pinrate.load("kinova")
+    assert (robot.nq, robot.nv) == (9, 6)
+    q = robot.random_configuration(7)
+    jacobian = robot.jacobian(q)
+    assert jacobian.shape == (6, 6)
+    np.testing.assert_allclose(jacobian, finite_difference_jacobian(robot, q), atol=1e-6)
+
+
+def test_random_configuration_respects_limits_and_seeds(mixed: pinrate.Robot) -> None:
+    lower, upper = mixed.position_limits()
+    samples = mixed.sample_configurations(500, rng=1)
+    for joint in ("yaw", "slide", "pitch"):
+        i = mixed.model.joints[mixed.joint_id(joint)].idx_q
+        assert samples[:, i].min() >= lower[i] and samples[:, i].max() <= upper[i]
+    roll = mixed.model.joints[mixed.joint_id("roll")].idx_q
+    np.testing.assert_allclose(np.hypot(samples[:, roll], samples[:, roll + 1]), 1.0)
+    np.testing.assert_array_equal(mixed.random_configuration(5), mixed.random_configuration(5))
+    generator = np.random.default_rng(5)
+    np.testing.assert_array_equal(mixed.random_configuration(generator).shape, (mixed.nq,))
+
+
+# ---------------------------------------------------------------------- the Jacobian
+@pytest.mark.parametrize("seed", range(5))
+def test_ur5_jacobian_matches_finite_differences(ur5: pinrate.Robot, seed: int) -> None:
+    q = ur5.random_configuration(seed)
+    np.testing.assert_allclose(ur5.jacobian(q), finite_difference_jacobian(ur5, q), atol=1e-6)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_panda_jacobian_matches_finite_differences(panda: pinrate.Robot, seed: int) -> None:
+    q = panda.random_configuration(seed)
+    jacobian = panda.jacobian(q)
+    np.testing.assert_allclose(jacobian, finite_difference_jacobian(panda, q), atol=1e-6)
+    # The fingers do not move the hand's TCP.
+    np.testing.assert_allclose(jacobian[:, 7:], 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("sensor", ["link2", "tool", "base", "pitch"])
+def test_mixed_joint_jacobian_matches_finite_differences(seed: int, sensor: str) -> None:
+    robot = pinrate.load(DATA / "mixed_joints.urdf", tip="tool", sensor=sensor)
+    q = robot.random_configuration(seed)
+    np.testing.assert_allclose(robot.jacobian(q), finite_difference_jacobian(robot, q), atol=1e-6)
+
+
+def test_sensor_on_another_branch(mixed: pinrate.Robot) -> None:
+    robot = pinrate.load(DATA / "mixed_joints.urdf", tip="tool", sensor="finger")
+    q = robot.random_configuration(11)
+    np.testing.assert_allclose(robot.jacobian(q), finite_difference_jacobian(robot, q), atol=1e-6)
+
+
+def test_linear_rows_rotated_back_are_world_velocities(ur5: pinrate.Robot) -> None:
+    # R_world_sensor J_linear is the world-frame velocity (eq. 7-8), checked on plain q + dq.
+    q = ur5.random_configuration(4)
+    world_rotation = ur5.pose(q)[:3, :3]
+    jacobian = ur5.jacobian(q)
+    np.testing.assert_allclose(world_rotation @ jacobian[:3], finite_difference_world_linear(ur5, q), atol=1e-6)
+
+
+def finite_difference_world_linear(robot: pinrate.Robot, q: np.ndarray, step: float = 1e-6) -> np.ndarray:
+    columns = []
+    for i in range(robot.nv):
+        dq = np.zeros(robot.nq)
+        dq[i] = step
+        columns.append((robot.pose(q + dq)[:3, 3] - robot.pose(q - dq)[:3, 3]) / (2 * step))
+    return np.column_stack(columns)
+
+
+# ---------------------------------------------------------------------- bad input
+def test_missing_file_names_it(tmp_path) -> None:
+    path = tmp_path / "nowhere.urdf"
+    with pytest.raises(pinrate.LoadError, match=r"nowhere\.urdf"):
+        pinrate.load(path)
+
+
+def test_malformed_xml_names_the_file(tmp_path) -> None:
+    path = tmp_path / "broken.urdf"
+    path.write_text("<robot name='x'><link name='a'></robot>")
+    with pytest.raises(pinrate.LoadError, match=r"broken\.urdf.*malformed XML"):
+        pinrate.load(path)
+
+
+def test_xml_that_is_not_a_urdf(tmp_path) -> None:
+    path = tmp_path / "page.urdf"
+    path.write_text("<html><body/></html>")
+    with pytest.raises(pinrate.LoadError, match=r"page\.urdf.*not a URDF"):
+        pinrate.load(path)
+
+
+def test_urdf_pinocchio_rejects_is_a_load_error(tmp_path) -> None:
+    path = tmp_path / "nolimits.urdf"
+    path.write_text(
+        '<robot name="r"><link name="a"/><link name="b"/><joint name="j" type="revolute">'
+        '<parent link="a"/><child link="b"/></joint></robot>'
+    )
+    with pytest.raises(pinrate.LoadError, match=r"nolimits\.urdf"):
+        pinrate.load(path)
+
+
+def test_unknown_robot_name_lists_the_known_ones() -> None:
+    with pytest.raises(pinrate.LoadError) as error:
+        pinrate.load("ur55")
+    message = str(error.value)
+    assert "'ur55'" in message and "ur5" in message and "panda" in message and "scara" in message
+
+
+def test_unknown_frame_lists_the_frames() -> None:
+    with pytest.raises(pinrate.FrameError) as error:
+        pinrate.load("ur5", tip="tool9")
+    assert "tool9" in str(error.value) and "tool0" in str(error.value)
+    with pytest.raises(pinrate.PinrateError, match="sensor"):
+        pinrate.load("ur5", sensor="camera")
+
+
+@pytest.mark.parametrize("bad", [np.zeros(5), np.zeros(7), np.zeros((6, 1)), "abc"])
+def test_q_of_the_wrong_shape(ur5: pinrate.Robot, bad: object) -> None:
+    with pytest.raises(pinrate.InputError, match="q"):
+        ur5.jacobian(bad)
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_q_with_nan_or_inf_names_the_joint(ur5: pinrate.Robot, value: float) -> None:
+    q = ur5.home()
+    q[2] = value
+    with pytest.raises(pinrate.InputError, match="elbow_joint"):
+        ur5.pose(q)
+    with pytest.raises(ValueError):  # InputError is a ValueError too
+        ur5.jacobian(q)
+
+
+def test_missing_mesh_warns_but_kinematics_work(tmp_path) -> None:
+    text = (
+        (DATA / "mixed_joints.urdf")
+        .read_text()
+        .replace(
+            '<link name="tool"/>',
+            '<link name="tool"><visual><geometry><mesh filename="package://nowhere/tool.stl"/>'
+            "</geometry></visual></link>",
+        )
+    )
+    path = tmp_path / "with_mesh.urdf"
+    path.write_text(text)
+    robot = pinrate.load(path, tip="tool")
+    assert robot.jacobian(robot.neutral()).shape == (6, robot.nv)
+    with pytest.warns(UserWarning, match="visual meshes not loaded"):
+        assert robot.visual_model.ngeoms == 0
+
+
+def test_example_robot_meshes_load(ur5: pinrate.Robot) -> None:
+    assert ur5.visual_model.ngeoms >= 6

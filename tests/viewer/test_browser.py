@@ -1,0 +1,220 @@
+"""The Meshcat view in a real headless Chromium (Debian's /usr/bin/chromium, driven by Playwright).
+
+Skipped with a reason when Chromium or Playwright is missing, unless PINRATE_REQUIRE_BROWSER=1
+(CI sets it), which turns a missing browser into a failure.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import socket
+import tempfile
+import time
+from pathlib import Path
+from urllib.parse import urlparse
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pinrate
+from pinrate.kinematics.targets import nearby_target
+
+CHROMIUM = os.environ.get("PINRATE_CHROMIUM", "/usr/bin/chromium")
+REQUIRED = os.environ.get("PINRATE_REQUIRE_BROWSER") == "1"
+# Playwright adds --headless itself (headless=True) and the fresh --user-data-dir (persistent context).
+FLAGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--enable-unsafe-swiftshader",
+]
+
+
+def _browser_missing() -> str:
+    if not (Path(CHROMIUM).exists() or shutil.which(CHROMIUM)):
+        return f"Chromium not found at {CHROMIUM} (apt install chromium)"
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        return "playwright is not installed (pip install -e '.[test]')"
+    return ""
+
+
+MISSING = _browser_missing()
+if MISSING and REQUIRED:
+    raise RuntimeError(f"PINRATE_REQUIRE_BROWSER=1 but {MISSING}")
+pytestmark = pytest.mark.skipif(bool(MISSING), reason=MISSING or "browser available")
+
+# JavaScript run in the page: walk viewer.scene_tree by .children only (find() creates nodes).
+WALK = """
+(path) => {
+  let node = window.viewer.scene_tree;
+  for (const name of path) {
+    if (!node || !node.children || !(name in node.children)) return null;
+    node = node.children[name];
+  }
+  return node;
+}
+"""
+MESH_VERTICES = f"""
+(path) => {{
+  const node = ({WALK})(path);
+  if (!node || !node.object) return -1;
+  let count = 0;
+  node.object.traverse((o) => {{
+    if (o.isMesh && o.geometry && o.geometry.attributes.position) count += o.geometry.attributes.position.count;
+  }});
+  return count;
+}}
+"""
+# The node's world matrix relative to the /meshcat node (the three.js root is Z-up -> Y-up).
+RELATIVE_MATRIX = f"""
+(path) => {{
+  const walk = {WALK};
+  const root = walk(["meshcat"]);
+  const node = walk(path);
+  if (!root || !node) return null;
+  window.viewer.scene.updateMatrixWorld(true);
+  const inverse = root.object.matrixWorld.clone().invert();
+  return inverse.multiply(node.object.matrixWorld).elements;  // column-major
+}}
+"""
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright, tempfile.TemporaryDirectory() as profile:
+        context = playwright.chromium.launch_persistent_context(
+            profile, executable_path=CHROMIUM, headless=True, args=FLAGS, viewport={"width": 800, "height": 600}
+        )
+        yield context
+        context.close()
+
+
+def served_robot(name: str):
+    """A viewer with a short servo played and recorded; yields (viewer, trajectory, target)."""
+    robot = pinrate.load(name)
+    partition = pinrate.Partition.auto(robot)
+    _, target = nearby_target(robot, partition, seed=3)
+    trajectory = pinrate.servo(robot, robot.home(), target, max_steps=400)
+    viewer = pinrate.viewer.Viewer(robot)
+    viewer.show(robot.home())
+    viewer.play(trajectory, target=target, realtime=False, fps=10)
+    return viewer, trajectory, target
+
+
+@pytest.fixture(scope="module", params=["ur5", "scara"])
+def scene(request):
+    import pinrate.viewer  # noqa: F401  (the only module importing meshcat)
+
+    viewer, trajectory, target = served_robot(request.param)
+    yield viewer, trajectory, target
+    viewer.close()
+
+
+def open_page(browser, url: str):
+    page = browser.new_page()
+    page.goto(url)
+    page.wait_for_function("() => window.viewer !== undefined && window.viewer.scene_tree !== undefined")
+    return page
+
+
+def wait_for_meshes(page, viewer) -> None:
+    names = [
+        viewer._visualizer.getViewerNodeName(geometry, pin.GeometryType.VISUAL)
+        for geometry in viewer.robot.visual_model.geometryObjects
+    ]
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        counts = [page.evaluate(MESH_VERTICES, ["meshcat", *name.split("/"), "<object>"]) for name in names]
+        if all(count > 0 for count in counts):
+            return
+        page.wait_for_timeout(250)
+    raise AssertionError(f"meshes without vertices after 60 s: {dict(zip(names, counts, strict=True))}")
+
+
+def expected_transforms(viewer, q) -> dict[str, np.ndarray]:
+    return {
+        name: transform for name, transform in viewer.node_transforms(q).items() if name.startswith(pinrate.viewer.ROOT)
+    }
+
+
+def page_matrix(page, name: str) -> np.ndarray:
+    elements = page.evaluate(RELATIVE_MATRIX, ["meshcat", *name.split("/")])
+    assert elements is not None, f"no node {name}"
+    return np.array(elements).reshape(4, 4).T
+
+
+def test_every_visual_is_a_mesh_with_vertices(browser, scene) -> None:
+    viewer, _, _ = scene
+    assert viewer.robot.visual_model.ngeoms > 0
+    page = open_page(browser, viewer.url)
+    wait_for_meshes(page, viewer)
+    page.close()
+
+
+def test_drawn_link_poses_match_pinocchio(browser, scene) -> None:
+    viewer, trajectory, _ = scene
+    page = open_page(browser, viewer.url)
+    wait_for_meshes(page, viewer)
+    for name, transform in expected_transforms(viewer, trajectory.q[-1]).items():
+        np.testing.assert_allclose(page_matrix(page, name), transform, atol=1e-5, err_msg=name)
+    page.close()
+
+
+def test_target_and_path_exist(browser, scene) -> None:
+    viewer, _, target = scene
+    page = open_page(browser, viewer.url)
+    wait_for_meshes(page, viewer)
+    for path in (["markers", "target", "<object>"], ["paths", "0", "<object>"], ["markers", "tcp", "<object>"]):
+        assert page.evaluate(f"(p) => ({WALK})(p) !== null", ["meshcat", *path]), path
+    np.testing.assert_allclose(page_matrix(page, "markers/target"), target, atol=1e-6)
+    page.close()
+
+
+def test_screenshot_changes_when_the_robot_is_hidden(browser, scene) -> None:
+    from PIL import Image, ImageChops
+
+    viewer, _, _ = scene
+    page = open_page(browser, viewer.url)
+    wait_for_meshes(page, viewer)
+    page.wait_for_timeout(500)
+    shown = Image.open(io.BytesIO(page.screenshot())).convert("RGB")
+    page.evaluate(f"""() => {{
+        const node = ({WALK})(["meshcat", "{pinrate.viewer.ROOT}"]);
+        node.object.visible = false;
+        window.viewer.set_dirty();
+    }}""")
+    page.wait_for_timeout(500)
+    hidden = Image.open(io.BytesIO(page.screenshot())).convert("RGB")
+    changed = ImageChops.difference(shown, hidden).convert("L").point(lambda v: 255 if v > 16 else 0)
+    assert changed.getbbox() is not None
+    assert sum(changed.histogram()[255:]) > 500  # hundreds of pixels, not noise
+    page.close()
+
+
+def test_recorded_html_replays_offline(browser, scene, tmp_path) -> None:
+    viewer, trajectory, _ = scene
+    html = viewer.save_html(tmp_path / "run.html")
+    viewer.close()  # the server is gone: the page must stand alone
+    host, port = urlparse(viewer.url).hostname, urlparse(viewer.url).port
+    with socket.socket() as probe:
+        assert probe.connect_ex((host, port)) != 0, "the Meshcat server still listens"
+    page = open_page(browser, html.as_uri())
+    wait_for_meshes(page, viewer)
+    page.evaluate(
+        "() => { window.viewer.animator.pause(); window.viewer.animator.seek(window.viewer.animator.duration); }"
+    )
+    assert page.evaluate("() => window.viewer.animator.duration") > 0
+    for name, transform in expected_transforms(viewer, trajectory.q[-1]).items():
+        np.testing.assert_allclose(page_matrix(page, name), transform, atol=1e-4, err_msg=name)
+    page.close()
