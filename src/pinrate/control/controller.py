@@ -58,7 +58,7 @@ class PoseGoal:
         return cls(as_pose(target), check_positive(gain, "gain"))
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)  # a record, read-only by convention: frozen dataclasses cost ~1 µs per step
 class Observation:
     """What the controller sees at q, from one kinematics pass.
 
@@ -82,7 +82,7 @@ class Observation:
     error: np.ndarray | None = None
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)  # a record, read-only by convention
 class Step:
     """The outcome of one control step from ``observation.q``.
 

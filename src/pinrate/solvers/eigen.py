@@ -3,9 +3,10 @@ behind every rho that pinrate computes in closed form, on Python floats (one mat
 servo's step) and on numpy arrays (a stack of matrices, the work-volume maps) alike.
 
 The same source runs on both because every operation goes through an :class:`Ops`
-namespace: :data:`FLOATS` (``math``, branches by ``if``) or :data:`ARRAYS` (numpy
-ufuncs, branches by ``np.where``). Both branches of a ``where`` are evaluated, so every
-argument of a square root, a cube root, an arc cosine or a division is made safe first.
+namespace: :data:`FLOATS` (``math``; ``choose`` runs the one branch taken) or
+:data:`ARRAYS` (numpy ufuncs; ``choose`` runs both branches and picks elementwise with
+``np.where``). Since a branch may run where it is not taken, every argument of a square
+root, a cube root, an arc cosine or a division is made safe first.
 
 Accuracy: the characteristic polynomial is taken of the *shifted* matrix M - s I with
 s = tr M / n (for 2x2: the discriminant ((a - d) / 2)^2 + b c), so a multiple eigenvalue
@@ -43,6 +44,8 @@ class Ops:
     minimum: Callable[[Any, Any], Any]
     where: Callable[[Any, Any, Any], Any]
     absolute: Callable[[Any], Any]
+    choose: Callable[[Any, Callable[[], Any], Callable[[], Any]], Any]
+    """choose(condition, if_true, if_false): the value of the branch (a thunk) taken."""
 
 
 def _float_cbrt(x: float) -> float:
@@ -53,10 +56,18 @@ def _float_where(condition: bool, if_true: float, if_false: float) -> float:
     return if_true if condition else if_false
 
 
-FLOATS = Ops(math.sqrt, _float_cbrt, math.acos, math.cos, math.hypot, max, min, _float_where, abs)
+def _float_choose(condition: bool, if_true: Callable[[], float], if_false: Callable[[], float]) -> float:
+    return if_true() if condition else if_false()
+
+
+def _array_choose(condition: np.ndarray, if_true: Callable[[], Any], if_false: Callable[[], Any]) -> np.ndarray:
+    return np.where(condition, if_true(), if_false())
+
+
+FLOATS = Ops(math.sqrt, _float_cbrt, math.acos, math.cos, math.hypot, max, min, _float_where, abs, _float_choose)
 """Python floats: one matrix."""
 
-ARRAYS = Ops(np.sqrt, np.cbrt, np.arccos, np.cos, np.hypot, np.maximum, np.minimum, np.where, np.abs)
+ARRAYS = Ops(np.sqrt, np.cbrt, np.arccos, np.cos, np.hypot, np.maximum, np.minimum, np.where, np.abs, _array_choose)
 """numpy arrays: elementwise over a stack of matrices."""
 
 
@@ -94,21 +105,25 @@ def spectral_radius_3(m: tuple[Any, ...], ops: Ops) -> Any:
     third_p = p * (1.0 / 3.0)
     discriminant = half_q * half_q + third_p * third_p * third_p
     one_real = discriminant > 0.0
-    # Cardano: u = cbrt(-q/2 - sign(q) sqrt(D)) has no cancellation; v = -p / (3 u).
-    root = ops.sqrt(ops.maximum(discriminant, 0.0))
-    u = ops.cbrt(ops.where(half_q >= 0.0, -half_q - root, -half_q + root))
-    safe_u = ops.where(u == 0.0, 1.0, u)
-    v = ops.where(u == 0.0, 0.0, -third_p / safe_u)
-    real_part = -(u + v) * 0.5 + shift
-    imaginary_part = _SQRT3_HALF * (u - v)
-    cardano = ops.maximum(ops.absolute(u + v + shift), ops.hypot(real_part, imaginary_part))
-    # Viète: p <= 0 here; p = 0 only with q = 0, a triple root t = 0 (and a |p| below
-    # _FLAT spreads the roots by less than 1e-100: rho is |s| to every digit).
-    flat = p >= -_FLAT
-    safe_p = ops.where(one_real | flat, -1.0, p)
-    radius = 2.0 * ops.sqrt(-safe_p * (1.0 / 3.0))
-    angle = ops.arccos(ops.maximum(-1.0, ops.minimum(1.0, 3.0 * q / (safe_p * radius)))) * (1.0 / 3.0)
-    roots = [radius * ops.cos(angle - k * _TWO_PI_THIRDS) + shift for k in range(3)]
-    viete = ops.maximum(ops.maximum(ops.absolute(roots[0]), ops.absolute(roots[1])), ops.absolute(roots[2]))
-    viete = ops.where(flat, ops.absolute(shift), viete)
-    return ops.where(one_real, cardano, viete)
+
+    def cardano() -> Any:
+        # u = cbrt(-q/2 - sign(q) sqrt(D)) has no cancellation; v = -p / (3 u).
+        root = ops.sqrt(ops.maximum(discriminant, 0.0))
+        u = ops.cbrt(ops.where(half_q >= 0.0, -half_q - root, -half_q + root))
+        v = -third_p / ops.where(u == 0.0, 1.0, u)  # u = 0 only where D <= 0 (not taken)
+        real_part = -(u + v) * 0.5 + shift
+        imaginary_part = _SQRT3_HALF * (u - v)
+        return ops.maximum(ops.absolute(u + v + shift), ops.hypot(real_part, imaginary_part))
+
+    def viete() -> Any:
+        # p <= 0 here; p = 0 only with q = 0, a triple root t = 0 (and a |p| below _FLAT
+        # spreads the roots by less than 1e-100: rho is |s| to every digit).
+        flat = p >= -_FLAT
+        safe_p = ops.where(one_real | flat, -1.0, p)
+        radius = 2.0 * ops.sqrt(-safe_p * (1.0 / 3.0))
+        angle = ops.arccos(ops.maximum(-1.0, ops.minimum(1.0, 3.0 * q / (safe_p * radius)))) * (1.0 / 3.0)
+        roots = [radius * ops.cos(angle - k * _TWO_PI_THIRDS) + shift for k in range(3)]
+        largest = ops.maximum(ops.maximum(ops.absolute(roots[0]), ops.absolute(roots[1])), ops.absolute(roots[2]))
+        return ops.where(flat, ops.absolute(shift), largest)
+
+    return ops.choose(one_real, cardano, viete)

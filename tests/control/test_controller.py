@@ -1,0 +1,103 @@
+"""Controller.step: the one step under the servo, checked against independent computations."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pinrate
+from pinrate.control import Controller, PoseGoal, Status
+from pinrate.control.status import SEVERITY, most_severe
+
+
+@pytest.mark.parametrize("algorithm", pinrate.ALGORITHMS)
+def test_a_twist_step_is_joint_rates_integrated(ur5: pinrate.Robot, algorithm: str) -> None:
+    controller = Controller(ur5, algorithm=algorithm, dt=0.02, max_linear_speed=np.inf, max_angular_speed=np.inf)
+    q = ur5.home()
+    twist = np.array([0.05, -0.02, 0.03, 0.1, -0.05, 0.2])
+    step = controller.step(q, twist)
+    rates = pinrate.joint_rates(ur5, q, twist, algorithm=algorithm)
+    # The step's Jacobian comes from the kinematics pass that also gives the poses
+    # (computeJointJacobians), joint_rates' from computeFrameJacobian: equal to rounding.
+    np.testing.assert_allclose(step.joint_rates, rates, rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(step.q, pin.integrate(ur5.model, q, step.joint_rates * 0.02))
+    assert step.status is Status.OK
+    assert step.frozen == ()
+    # The step's own observation: the sensor-frame Jacobian at q.
+    np.testing.assert_allclose(step.observation.jacobian, ur5.jacobian(q), atol=1e-15)
+
+
+def test_saturation_keeps_the_direction(ur5: pinrate.Robot) -> None:
+    controller = Controller(ur5, max_linear_speed=0.1, max_angular_speed=0.2)
+    twist = np.array([0.3, 0.4, 0.0, 0.0, 0.0, 2.0])
+    step = controller.step(ur5.home(), twist)
+    assert step.status is Status.TWIST_SATURATED
+    np.testing.assert_allclose(step.twist, [0.06, 0.08, 0.0, 0.0, 0.0, 0.2])
+
+
+def test_a_pose_goal_commands_gain_times_the_error(ur5: pinrate.Robot) -> None:
+    controller = Controller(ur5, algorithm="exact", max_linear_speed=np.inf, max_angular_speed=np.inf)
+    q = ur5.home()
+    target = ur5.pose(q)
+    target[:3, 3] += [0.01, -0.02, 0.005]  # a pure translation, in world axes
+    step = controller.step(q, PoseGoal.of(target, gain=2.0))
+    tip_rotation = ur5.pose(q)[:3, :3]  # the sensor is the tip: errors in tip axes
+    expected = 2.0 * np.concatenate([tip_rotation.T @ np.array([0.01, -0.02, 0.005]), np.zeros(3)])
+    np.testing.assert_allclose(step.twist, expected, atol=1e-15)
+
+
+def test_a_singular_block_halts_instead_of_raising(ur5: pinrate.Robot) -> None:
+    q = ur5.home()
+    q[4] = 0.0  # wrist_2 = 0: W is singular
+    step = Controller(ur5, algorithm="mca1").step(q, np.full(6, 0.1))
+    assert step.status is Status.HALT_FOR_SINGULARITY
+    assert "block W" in step.detail
+    np.testing.assert_array_equal(step.q, q)
+    assert not step.joint_rates.any()
+    assert step.observation.spectral_radius == np.inf
+
+
+def test_a_joint_pushed_past_its_limit_is_clamped() -> None:
+    robot = pinrate.robots.hirata_arh300()
+    theta2 = robot.joint_names[1]
+    lower, _ = robot.joint_limits(theta2)
+    q = robot.home()
+    q[1] = lower + 1e-4
+    controller = Controller(robot, algorithm="exact", dt=0.1)
+    # The joint-space rate that drives theta2 down, as a twist: J e2 (negated).
+    direction = -robot.jacobian(q)[controller.index.rows][:, 1]
+    step = controller.step(q, direction)
+    assert step.status is Status.JOINT_LIMIT
+    assert theta2 in step.detail
+    assert step.q[1] == lower
+
+
+def test_bad_commands_are_input_errors(ur5: pinrate.Robot) -> None:
+    controller = Controller(ur5)
+    with pytest.raises(pinrate.InputError, match="twist"):
+        controller.step(ur5.home(), np.ones(5))
+    with pytest.raises(pinrate.InputError, match="algorithm"):
+        Controller(ur5, algorithm="mca4")
+    with pytest.raises(pinrate.InputError, match="dt"):
+        Controller(ur5, dt=0.0)
+    with pytest.raises(pinrate.InputError, match="gain"):
+        PoseGoal.of(np.eye(4), gain=-1.0)
+
+
+def test_statuses_rank_as_the_contract_says() -> None:
+    contract = [
+        Status.OK,
+        Status.RATE_LIMITED,
+        Status.JOINT_LIMIT,
+        Status.WRIST_SINGULARITY,
+        Status.DECELERATE_FOR_SINGULARITY,
+        Status.AUXILIARY_ELBOW,
+        Status.FROZEN,
+        Status.HALT_FOR_SINGULARITY,
+    ]
+    ranks = [SEVERITY.index(status) for status in contract]
+    assert ranks == sorted(ranks)
+    assert most_severe(Status.RATE_LIMITED, Status.FROZEN, Status.OK) is Status.FROZEN
+    assert most_severe() is Status.OK
+    assert isinstance(Status.OK, str)
