@@ -1,5 +1,5 @@
 """The ``pinrate`` command line: ``list``, ``demo``, ``analyze`` and ``paper``."""
 
-from .main import build_parser, main
+from .commands import build_parser, main
 
 __all__ = ["build_parser", "main"]

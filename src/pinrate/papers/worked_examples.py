@@ -32,7 +32,7 @@ import numpy as np
 
 from .. import robots
 from ..analysis import design
-from ..control.servo import servo
+from ..control.servo_loop import servo
 from ..errors import SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition

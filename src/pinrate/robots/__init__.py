@@ -1,13 +1,13 @@
 """Robots by name: the papers' robots as parametric URDFs, example-robot-data's arms, and
 :func:`load` for any URDF.
 
-``pinrate.robots.NAME(**lengths)`` builds a papers' robot (see :mod:`.papers` for each one's
+``pinrate.robots.NAME(**lengths)`` builds a papers' robot (see :mod:`.parametric` for each one's
 frames and conventions); ``pinrate.robots.urdf(NAME, **lengths)`` returns its URDF text.
 """
 
 from .catalog import EXAMPLE_ROBOTS, CatalogEntry, example_robot_data_share, example_robot_path
 from .loading import known_names, load
-from .papers import (
+from .parametric import (
     ROBOT_NAMES,
     barker_arm,
     build,

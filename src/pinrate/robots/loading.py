@@ -8,13 +8,13 @@ from pathlib import Path
 from ..errors import InputError, LoadError, choices_hint
 from ..kinematics.manipulator import Robot
 from ..kinematics.urdf import read_urdf, robot_from_urdf
-from . import papers
+from . import parametric
 from .catalog import EXAMPLE_ROBOTS, CatalogEntry, example_robot_data_share, example_robot_path
 
 
 def known_names() -> list[str]:
     """Every name :func:`load` accepts: the papers' robots, then example-robot-data's."""
-    return [*papers.ROBOT_NAMES, *EXAMPLE_ROBOTS]
+    return [*parametric.ROBOT_NAMES, *EXAMPLE_ROBOTS]
 
 
 def load(source: str | os.PathLike[str], *, tip: str | None = None, sensor: str | None = None) -> Robot:
@@ -45,8 +45,8 @@ def load(source: str | os.PathLike[str], *, tip: str | None = None, sensor: str 
         )
     if not isinstance(source, str):
         raise InputError(f"source must be a URDF path or a robot name, not {type(source).__name__}")
-    if source in papers.ROBOT_NAMES:
-        return papers.build(source, tip=tip, sensor=sensor)
+    if source in parametric.ROBOT_NAMES:
+        return parametric.build(source, tip=tip, sensor=sensor)
     entry = EXAMPLE_ROBOTS.get(source)
     if entry is None:
         raise LoadError(f"unknown robot name {source!r}." + choices_hint(source, known_names()))

@@ -1,6 +1,6 @@
 """URDF text from a few primitives: links with cylinder, box and sphere visuals, joints.
 
-What :mod:`pinrate.robots.papers` builds the papers' robots with; the output is plain URDF
+What :mod:`pinrate.robots.parametric` builds the papers' robots with; the output is plain URDF
 that any parser reads (full double precision in every origin and limit).
 """
 

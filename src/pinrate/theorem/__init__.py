@@ -2,7 +2,7 @@
 (:func:`convergence`) and over the work volume (:func:`sample_convergence`,
 :func:`spectral_radius_at`)."""
 
-from .convergence import Convergence, convergence, convergence_from_blocks
+from .pointwise import Convergence, convergence, convergence_from_blocks
 from .sampling import ConvergenceSample, sample_convergence, spectral_radius_at, wilson_interval
 
 __all__ = [

@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from .. import analysis, robots
-from ..control.servo import servo
+from ..control.servo_loop import servo
 from ..control.trajectory import Trajectory
 from ..errors import InputError, PinrateError
 from ..kinematics.manipulator import Robot

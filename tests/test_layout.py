@@ -1,0 +1,75 @@
+"""The package's shape: no name traps, no private module used across subpackages.
+
+The layers themselves (imports only go down) are import-linter's contract in
+pyproject.toml, which ``make test`` runs.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import itertools
+import pkgutil
+from pathlib import Path
+
+import pytest
+
+import pinrate
+
+PACKAGE = Path(pinrate.__file__).parent
+MODULES = sorted(
+    info.name
+    for info in pkgutil.walk_packages([str(PACKAGE)], prefix="pinrate.")
+    if not info.name.endswith("__main__")  # running it would run the CLI
+)
+
+
+def one_edit_apart(a: str, b: str) -> bool:
+    """Whether b is a with one letter inserted, deleted or replaced (or the same)."""
+    if abs(len(a) - len(b)) > 1:
+        return False
+    if len(a) == len(b):
+        return sum(x != y for x, y in zip(a, b, strict=True)) <= 1
+    short, long = sorted((a, b), key=len)
+    return any(long[:i] + long[i + 1 :] == short for i in range(len(long)))
+
+
+def test_no_two_modules_are_named_alike() -> None:
+    names = sorted({name.rsplit(".", 1)[-1] for name in MODULES} - {"__init__"})
+    assert len(names) == len({name.rsplit(".", 1)[-1] for name in MODULES}), "two modules share a name"
+    alike = [(a, b) for a, b in itertools.combinations(names, 2) if one_edit_apart(a, b)]
+    assert not alike, f"module names one letter apart: {alike}"
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_importing_a_module_yields_the_module(name: str) -> None:
+    """``import pinrate.x.y`` must give the module y, never a function its package exports."""
+    module = importlib.import_module(name)
+    parent, _, leaf = name.rpartition(".")
+    assert getattr(importlib.import_module(parent), leaf) is module
+
+
+def test_no_private_module_exists_or_is_imported_across_subpackages() -> None:
+    private = [name for name in MODULES if name.rsplit(".", 1)[-1].startswith("_")]
+    assert not private, f"private modules: {private}"
+    for path in PACKAGE.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                assert not any(part.startswith("_") for part in node.module.split(".") if part != "__future__"), (
+                    f"{path.relative_to(PACKAGE)} imports from {node.module}"
+                )
+
+
+def test_no_import_inside_a_function_except_optional_dependencies() -> None:
+    """Deferred imports only for what not every run needs: Dask, the browser viewer."""
+    allowed = {"distributed", "pinrate.viewer", "viewer"}
+    for path in PACKAGE.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for function in (n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)):
+            for node in ast.walk(function):
+                if isinstance(node, ast.Import | ast.ImportFrom):
+                    module = node.module if isinstance(node, ast.ImportFrom) else node.names[0].name
+                    assert (module or "").lstrip(".") in allowed, (
+                        f"{path.relative_to(PACKAGE)}:{node.lineno} imports {module} inside {function.name}"
+                    )
