@@ -60,9 +60,7 @@ def partition_spectral_radius(J: np.ndarray, index: PartitionIndex, parts: close
         if parts is not None:
             return closed_form.spectral_radius(parts)
         reduced = J[np.ix_(index.rows, index.columns)]
-        G, H = reference.convergence_matrices(*split_blocks(reduced, index.m, index.arm_columns.size))
-        eigenvalues = reference.eigenvalues(G if G.shape[0] <= H.shape[0] else H)
-        return float(np.max(np.abs(eigenvalues))) if eigenvalues.size else 0.0
+        return reference.spectral_radius(*split_blocks(reduced, index.m, index.arm_columns.size))
     except SingularBlockError:
         return math.inf
 

@@ -159,6 +159,18 @@ def convergence_matrices(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndar
     return P @ Q, Q @ P
 
 
-def eigenvalues(M: np.ndarray) -> np.ndarray:
-    """The eigenvalues of a square matrix (LAPACK), empty for an empty one."""
-    return np.linalg.eigvals(M) if M.size else np.zeros(0, dtype=complex)
+def smaller_eigenvalues(G: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """The eigenvalues (LAPACK) of the smaller of G and H, which share their non-zero ones
+    (the Theorem); empty when that one is empty."""
+    smaller = G if G.shape[0] <= H.shape[0] else H
+    return np.linalg.eigvals(smaller) if smaller.size else np.zeros(0, dtype=complex)
+
+
+def spectral_radius(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> float:
+    """ρ, the largest |eigenvalue| of G and H (eq. 32, 50), 0.0 when there is none.
+
+    Raises:
+        SingularBlockError: A or W is square and singular.
+    """
+    eigenvalues = smaller_eigenvalues(*convergence_matrices(A, B, U, W))
+    return float(np.max(np.abs(eigenvalues))) if eigenvalues.size else 0.0

@@ -44,7 +44,7 @@ class Convergence:
 def convergence_from_blocks(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> Convergence:
     """The Theorem's test from the blocks of eq. 19 (numpy reference: LAPACK eigenvalues)."""
     G, H = reference.convergence_matrices(A, B, U, W)
-    eigenvalues = reference.eigenvalues(G if G.shape[0] <= H.shape[0] else H)
+    eigenvalues = reference.smaller_eigenvalues(G, H)
     radius = float(np.max(np.abs(eigenvalues))) if eigenvalues.size else 0.0
     return Convergence(G=G, H=H, eigenvalues=eigenvalues, spectral_radius=radius, converges=radius < 1.0)
 

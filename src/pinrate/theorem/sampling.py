@@ -142,7 +142,7 @@ def sample_convergence(
     """
     samples = check_count(samples, "samples", minimum=1)
     partition = Partition.auto(robot) if partition is None else partition
-    configurations = robot.sample_configurations(int(samples), rng, joints=partition.joints)
+    configurations = robot.sample_configurations(samples, rng, joints=partition.joints)
     radii = spectral_radius_at(
         robot, configurations, partition=partition, workers=workers, scheduler=scheduler, progress=progress
     )
