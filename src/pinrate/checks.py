@@ -18,10 +18,24 @@ from .errors import InputError
 RngLike = np.random.Generator | int | None
 
 
-def check_vector(value: object, length: int, what: str, *, names: Sequence[str] | None = None) -> np.ndarray:
-    """A float vector of the given length; InputError naming ``what`` otherwise.
+PHYSICAL_BOUND = 1e6
+"""Largest magnitude pinrate accepts in a joint coordinate (rad or m), a twist component
+(m/s or rad/s), a target position (m), a gain (1/s) or a time (s). Nothing physical comes
+near it, and below it the algebra cannot overflow (squares stay under 1e12 per entry)."""
 
-    ``names`` labels the entries (joint names for q) in the message about NaN or inf.
+
+def check_vector(
+    value: object,
+    length: int,
+    what: str,
+    *,
+    names: Sequence[str] | None = None,
+    bound: float = PHYSICAL_BOUND,
+) -> np.ndarray:
+    """A float vector of the given length, each entry finite and within ±``bound``;
+    InputError naming ``what`` (and the entry) otherwise.
+
+    ``names`` labels the entries (joint names for q) in the message.
     """
     try:
         array = np.asarray(value, dtype=float)
@@ -29,25 +43,40 @@ def check_vector(value: object, length: int, what: str, *, names: Sequence[str] 
         raise InputError(f"{what} must be a vector of {length} numbers: {error}") from None
     if array.shape != (length,):
         raise InputError(f"{what} must have shape ({length},), got shape {array.shape}")
-    # A finite sum proves every entry finite (the cheap test on the hot path); an overflowing
-    # sum of finite entries falls through to the entry-wise test.
-    if not math.isfinite(array.sum()) and not np.isfinite(array).all():
-        bad = np.flatnonzero(~np.isfinite(array))
-        where = ", ".join(f"{what}[{i}]" + (f" ({names[int(i)]})" if names and names[int(i)] else "") for i in bad)
-        raise InputError(f"{what} contains NaN or inf at {where}")
+    # One dot product proves every entry finite and within the bound (the cheap test on the
+    # hot path); anything else falls through to the entry-wise test that names the culprit.
+    if not float(array @ array) <= bound * bound:
+        _refuse_entries(array, what, names, bound)
     return array
 
 
-def check_positive(value: object, name: str, *, allow_inf: bool = False) -> float:
-    """``value`` as a float > 0 (finite unless ``allow_inf``); InputError naming ``name`` otherwise."""
+def _refuse_entries(array: np.ndarray, what: str, names: Sequence[str] | None, bound: float) -> None:
+    def label(i: int) -> str:
+        return f"{what}[{i}]" + (f" ({names[i]})" if names and names[i] else "")
+
+    bad = np.flatnonzero(~np.isfinite(array))
+    if bad.size:
+        raise InputError(f"{what} contains NaN or inf at {', '.join(label(int(i)) for i in bad)}")
+    large = np.flatnonzero(np.abs(array) > bound)
+    if large.size:
+        shown = ", ".join(f"{label(int(i))} = {array[i]:.3g}" for i in large)
+        raise InputError(f"{what} is beyond the physical bound ±{bound:g}: {shown}")
+    # Entries within the bound whose squares sum past bound**2 (a long vector): acceptable.
+
+
+def check_positive(
+    value: object, name: str, *, allow_inf: bool = False, maximum: float = PHYSICAL_BOUND
+) -> float:
+    """``value`` as a float in (0, ``maximum``] (or inf when ``allow_inf``); InputError
+    naming ``name`` otherwise."""
     if (
         isinstance(value, bool)
         or not isinstance(value, numbers.Real)
         or math.isnan(value)
         or value <= 0
-        or (value == math.inf and not allow_inf)
+        or (value > maximum and not (value == math.inf and allow_inf))
     ):
-        bound = "a positive number (or inf)" if allow_inf else "a positive finite number"
+        bound = f"a positive number up to {maximum:g}" + (" (or inf)" if allow_inf else "")
         raise InputError(f"{name} must be {bound}, got {value!r}")
     return float(value)
 
@@ -61,12 +90,16 @@ def check_count(value: object, name: str, *, minimum: int = 0) -> int:
 
 
 def as_rng(rng: RngLike) -> np.random.Generator:
-    """A numpy Generator from a Generator, an int seed, or None (fresh entropy)."""
+    """A numpy Generator from a Generator, a non-negative int seed, or None (fresh entropy)."""
     if isinstance(rng, np.random.Generator):
         return rng
-    if rng is None or isinstance(rng, int | np.integer):
+    if rng is None:
+        return np.random.default_rng()
+    if isinstance(rng, int | np.integer) and not isinstance(rng, bool):
+        if rng < 0:
+            raise InputError(f"rng seed must be a non-negative integer, got {rng}")
         return np.random.default_rng(rng)
-    raise InputError(f"rng must be a numpy Generator, an int seed or None, not {type(rng).__name__}")
+    raise InputError(f"rng must be a numpy Generator, a non-negative int seed or None, not {rng!r}")
 
 
 def as_pose(target: object) -> pin.SE3:
@@ -82,6 +115,8 @@ def as_pose(target: object) -> pin.SE3:
         raise InputError(f"target must be a 4x4 homogeneous matrix, got shape {matrix.shape}")
     if not np.isfinite(matrix).all():
         raise InputError("target contains NaN or inf")
+    if np.abs(matrix[:3, 3]).max() > PHYSICAL_BOUND:
+        raise InputError(f"target's position is beyond the physical bound ±{PHYSICAL_BOUND:g} m: {matrix[:3, 3]}")
     rotation = matrix[:3, :3]
     if not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-6) or np.linalg.det(rotation) < 0:
         raise InputError("target's upper-left 3x3 block is not a rotation matrix")

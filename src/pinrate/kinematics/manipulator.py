@@ -26,10 +26,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..checks import RngLike, as_rng, check_vector
-from ..errors import InputError, PinrateError, choices_hint
+from ..errors import InputError, LoadError, PinrateError, choices_hint
 from .frames import default_tip_frame, resolve_frame
 
 logger = logging.getLogger("pinrate")
+
+UNIT_TOLERANCE = 1e-6
+"""How far from 1 the norm of a continuous joint's (cos, sin) pair (or a quaternion) in q may be."""
 
 
 @dataclass(frozen=True)
@@ -75,6 +78,11 @@ class Robot:
         self._urdf_text = urdf_text
         self._package_dirs = list(package_dirs)
         self._visual_model: pin.GeometryModel | None = None
+        self.joint_names: tuple[str, ...] = tuple(
+            model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0
+        )
+        if not self.joint_names:
+            raise LoadError(f"robot {self.name!r} has no moving joint: every joint is fixed, nothing to control")
 
         if tip is None:
             self.tip_id = default_tip_frame(model)
@@ -84,12 +92,14 @@ class Robot:
             self.tip_id = resolve_frame(model, tip, role="tip", robot=self.name)
             self.tip_choice = "given"
         self.tip = model.frames[self.tip_id].name
+        if not self.tip_chain():
+            raise LoadError(
+                f"robot {self.name!r}: tip frame {self.tip!r} has no moving joint between it and the world, "
+                "so no joint rate can move it; choose a frame on the arm"
+            )
         self.sensor_id = self.tip_id if sensor is None else resolve_frame(model, sensor, role="sensor", robot=self.name)
         self.sensor = model.frames[self.sensor_id].name
 
-        self.joint_names: tuple[str, ...] = tuple(
-            model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0
-        )
         self._joint_ids = {model.names[j]: j for j in range(1, model.njoints)}
         self.reference_configurations: dict[str, np.ndarray] = {
             key: np.array(value, dtype=float) for key, value in (reference_configurations or {}).items()
@@ -196,8 +206,33 @@ class Robot:
         return self.sample_configurations(1, rng)[0]
 
     def check_q(self, q: object) -> np.ndarray:
-        """q as a float array of shape (nq,); InputError on a wrong length or NaN/inf."""
-        return check_vector(q, self.nq, "q", names=self._q_names)
+        """q as a float array of shape (nq,); InputError on a wrong length, NaN/inf, a
+        magnitude past :data:`~pinrate.checks.PHYSICAL_BOUND`, or a continuous joint's
+        (cos, sin) pair (or a quaternion) whose norm is off 1 by more than
+        :data:`UNIT_TOLERANCE`."""
+        q = check_vector(q, self.nq, "q", names=self._q_names)
+        if self._has_unit_pairs and not pin.isNormalized(self.model, q, UNIT_TOLERANCE):
+            self._refuse_unnormalised(q)
+        return q
+
+    @functools.cached_property
+    def _has_unit_pairs(self) -> bool:
+        return self.model.nq != self.model.nv
+
+    def _refuse_unnormalised(self, q: np.ndarray) -> None:
+        neutral = self.neutral()
+        for joint_id in range(1, self.model.njoints):
+            joint_model = self.model.joints[joint_id]
+            if joint_model.nq == joint_model.nv:
+                continue
+            block = slice(joint_model.idx_q, joint_model.idx_q + joint_model.nq)
+            probe = neutral.copy()
+            probe[block] = q[block]
+            if not pin.isNormalized(self.model, probe, UNIT_TOLERANCE):
+                raise InputError(
+                    f"q[{block.start}:{block.stop}] of joint {self.model.names[joint_id]!r} = {q[block]} must "
+                    "hold a unit (cos, sin) pair (or unit quaternion); write an angle a as (cos a, sin a)"
+                )
 
     @functools.cached_property
     def _q_names(self) -> list[str]:

@@ -7,47 +7,138 @@ non-URDF with a clear message.
 
 from __future__ import annotations
 
+import codecs
+import contextlib
 import functools
 import math
+import os
+import re
+import sys
+import tempfile
 import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
+from ..checks import check_count
 from ..errors import LoadError
 from .manipulator import Robot, RobotSpec
+from .urdf_structure import check_structure, max_joints_default
 
 
 # ---------------------------------------------------------------------- loading
-def read_urdf(path: Path) -> str:
-    """The text of a URDF file; LoadError naming the path when it is missing or a folder."""
+_BOMS = (
+    (codecs.BOM_UTF32_LE, "utf-32"),
+    (codecs.BOM_UTF32_BE, "utf-32"),
+    (codecs.BOM_UTF8, "utf-8-sig"),
+    (codecs.BOM_UTF16_LE, "utf-16"),
+    (codecs.BOM_UTF16_BE, "utf-16"),
+)
+_DECLARATION = re.compile(r"""^\s*<\?xml[^>]*?encoding\s*=\s*["']([A-Za-z0-9._-]+)["'][^>]*\?>""")
+_ANY_DECLARATION = re.compile(r"^\s*<\?xml[^>]*\?>")
+
+
+def read_urdf(path: Path) -> tuple[str, str]:
+    """The text of a URDF file and the encoding it was read in; LoadError naming the path
+    when it is missing or a folder, a ``.xacro``, or not decodable in its declared encoding."""
     if not path.exists():
         raise LoadError(f"URDF file not found: {path}")
     if not path.is_file():
         raise LoadError(f"URDF path is not a file: {path}")
-    return path.read_text(encoding="utf-8", errors="replace")
+    if path.name.endswith(".xacro"):
+        raise LoadError(_XACRO_HINT.format(label=path))
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise LoadError(f"URDF file cannot be read: {path} ({error.strerror or error})") from None
+    return decode_xml(data, str(path))
 
 
-def _check_urdf_text(text: str, label: str) -> ET.Element:
-    """The URDF's root element; LoadError naming ``label`` for malformed XML or a non-URDF."""
+def decode_xml(data: bytes, label: str) -> tuple[str, str]:
+    """XML bytes as text, in the encoding its byte-order mark or declaration names (UTF-8
+    when neither does, as XML 1.0 §4.3.3 says), and that encoding's name. The declaration
+    itself is dropped, since the text no longer is in that encoding."""
+    encoding = "utf-8"
+    for bom, name in _BOMS:
+        if data.startswith(bom):
+            encoding = name
+            break
+    else:
+        if data.startswith(b"<\x00"):
+            encoding = "utf-16-le"
+        elif data.startswith(b"\x00<"):
+            encoding = "utf-16-be"
+        else:
+            declared = _DECLARATION.match(data[:256].decode("latin-1"))
+            if declared:
+                encoding = declared.group(1)
+    try:
+        text = data.decode(encoding)
+    except LookupError:
+        raise LoadError(f"{label}: unknown XML encoding {encoding!r} in its declaration") from None
+    except UnicodeDecodeError as error:
+        raise LoadError(
+            f"{label}: not valid {encoding} text at byte {error.start}"
+            + ("" if encoding != "utf-8" else " (declare its encoding: <?xml version=\"1.0\" encoding=\"...\"?>)")
+        ) from None
+    return _ANY_DECLARATION.sub("", text.lstrip("\ufeff"), count=1), codecs.lookup(encoding).name
+
+
+_XACRO_HINT = (
+    "{label}: this is a xacro file, not a URDF: expand it first, e.g. `xacro robot.urdf.xacro > robot.urdf` "
+    "(ROS's xacro, also `pip install xacro`), and load the result"
+)
+
+
+def _check_urdf_text(text: str, label: str, max_joints: int) -> ET.Element:
+    """The URDF's root element; LoadError naming ``label`` for malformed XML, a non-URDF, a
+    xacro, or a structure Pinocchio cannot build soundly (:mod:`.urdf_structure`)."""
     try:
         root = ET.fromstring(text)
     except ET.ParseError as error:
+        if "<xacro:" in text:  # xacro without its namespace declared
+            raise LoadError(_XACRO_HINT.format(label=label)) from None
         raise LoadError(f"{label}: malformed XML ({error})") from None
+    # Expanded files often keep xmlns:xacro on <robot>; only xacro elements mean unexpanded.
+    if any(element.tag.startswith("{") and "xacro" in element.tag.split("}")[0] for element in root.iter()):
+        raise LoadError(_XACRO_HINT.format(label=label))
     if root.tag != "robot":
         raise LoadError(f"{label}: not a URDF (root element is <{root.tag}>, expected <robot>)")
+    check_structure(root, label, max_joints=max_joints)
     return root
 
 
-def _build_model(text: str, label: str) -> pin.Model:
+@contextlib.contextmanager
+def _stderr_captured() -> Iterator[list[str]]:
+    """Collect what C++ code writes to file descriptor 2 (urdfdom's reasons) into a list."""
+    lines: list[str] = []
+    sys.stderr.flush()
+    saved = os.dup(2)
     try:
-        return pin.buildModelFromXML(text)
-    except (ValueError, RuntimeError) as error:
-        detail = " ".join(str(error).split())
-        raise LoadError(f"{label}: Pinocchio could not build a model: {detail}") from None
+        with tempfile.TemporaryFile() as sink:
+            os.dup2(sink.fileno(), 2)
+            try:
+                yield lines
+            finally:
+                os.dup2(saved, 2)
+                sink.seek(0)
+                lines.extend(sink.read().decode("utf-8", "replace").splitlines())
+    finally:
+        os.close(saved)
+
+
+def _build_model(text: str, label: str) -> pin.Model:
+    with _stderr_captured() as messages:
+        try:
+            return pin.buildModelFromXML(text)
+        except (ValueError, RuntimeError) as error:
+            failure = " ".join(str(error).split())
+    reasons = [line.strip().removeprefix("Error:").strip() for line in messages if line.strip().startswith("Error:")]
+    detail = "; ".join(reasons) or failure
+    raise LoadError(f"{label}: Pinocchio could not build a model: {detail}")
 
 
 def robot_from_urdf(
@@ -62,9 +153,14 @@ def robot_from_urdf(
     home: str | None = None,
     home_values: Mapping[str, float] | None = None,
     name: str | None = None,
+    max_joints: int | None = None,
 ) -> Robot:
-    """A Robot from URDF text: the common path of every way of loading."""
-    root = _check_urdf_text(text, label)
+    """A Robot from URDF text: the common path of every way of loading.
+
+    ``max_joints`` bounds the moving joints (default :func:`.urdf_structure.max_joints_default`).
+    """
+    limit = max_joints_default() if max_joints is None else check_count(max_joints, "max_joints", minimum=1)
+    root = _check_urdf_text(text, label, limit)
     model = _build_model(text, label)
     references: dict[str, np.ndarray] = {}
     if srdf_path is not None and srdf_path.is_file():

@@ -17,7 +17,13 @@ def known_names() -> list[str]:
     return [*parametric.ROBOT_NAMES, *EXAMPLE_ROBOTS]
 
 
-def load(source: str | os.PathLike[str], *, tip: str | None = None, sensor: str | None = None) -> Robot:
+def load(
+    source: str | os.PathLike[str],
+    *,
+    tip: str | None = None,
+    sensor: str | None = None,
+    max_joints: int | None = None,
+) -> Robot:
     """Load a robot from a URDF path, a papers'-robot name or an example-robot-data name.
 
     Args:
@@ -27,21 +33,28 @@ def load(source: str | os.PathLike[str], *, tip: str | None = None, sensor: str 
             both a link and a joint means the link). Default: the name table's tip; for any
             other URDF, the deepest frame at the end of the longest chain of moving joints.
         sensor: the frame whose axes twists are expressed in. Default: the tip.
+        max_joints: refuse URDFs with more moving joints (default
+            :data:`pinrate.kinematics.urdf_structure.MAX_JOINTS`, 100, or the
+            ``PINRATE_MAX_JOINTS`` environment variable): Pinocchio's data grows with the
+            cube of the joint count.
 
     Raises:
-        LoadError: missing file, malformed XML, not a URDF, unknown robot name.
+        LoadError: missing file, malformed XML, not a URDF, a ``.xacro``, a structure fault
+            (named joint or link), too many joints, no moving joint, unknown robot name.
         FrameError: unknown tip or sensor frame (the message lists the frames).
     """
     if isinstance(source, os.PathLike) or (isinstance(source, str) and _looks_like_path(source)):
         path = Path(source).expanduser().resolve()
-        text = read_urdf(path)
+        text, encoding = read_urdf(path)
         return robot_from_urdf(
             text,
             label=str(path),
             tip=tip,
             sensor=sensor,
-            urdf_path=path,
+            # urdfdom reads files as UTF-8: the visuals of a file in another encoding come from the text
+            urdf_path=path if encoding in ("utf-8", "ascii") else None,
             package_dirs=_package_dirs_for(path),
+            max_joints=max_joints,
         )
     if not isinstance(source, str):
         raise InputError(f"source must be a URDF path or a robot name, not {type(source).__name__}")
@@ -54,7 +67,7 @@ def load(source: str | os.PathLike[str], *, tip: str | None = None, sensor: str 
 
 
 def _looks_like_path(source: str) -> bool:
-    return source.endswith((".urdf", ".xml")) or os.sep in source or "/" in source
+    return source.endswith((".urdf", ".xml", ".xacro")) or os.sep in source or "/" in source
 
 
 def _package_dirs_for(path: Path) -> list[str]:
@@ -71,7 +84,7 @@ def _load_example_robot(entry: CatalogEntry, *, tip: str | None, sensor: str | N
     srdf = example_robot_path(entry.srdf) if entry.srdf else None
     share = example_robot_data_share()
     return robot_from_urdf(
-        read_urdf(path),
+        read_urdf(path)[0],
         label=entry.name,
         tip=tip or entry.tip,
         sensor=sensor,
