@@ -64,9 +64,7 @@ def _refuse_entries(array: np.ndarray, what: str, names: Sequence[str] | None, b
     # Entries within the bound whose squares sum past bound**2 (a long vector): acceptable.
 
 
-def check_positive(
-    value: object, name: str, *, allow_inf: bool = False, maximum: float = PHYSICAL_BOUND
-) -> float:
+def check_positive(value: object, name: str, *, allow_inf: bool = False, maximum: float = PHYSICAL_BOUND) -> float:
     """``value`` as a float in (0, ``maximum``] (or inf when ``allow_inf``); InputError
     naming ``name`` otherwise."""
     if (

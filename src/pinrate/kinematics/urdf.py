@@ -28,7 +28,6 @@ from ..errors import LoadError
 from .manipulator import Robot, RobotSpec
 from .urdf_structure import check_structure, max_joints_default
 
-
 # ---------------------------------------------------------------------- loading
 _BOMS = (
     (codecs.BOM_UTF32_LE, "utf-32"),
@@ -82,7 +81,7 @@ def decode_xml(data: bytes, label: str) -> tuple[str, str]:
     except UnicodeDecodeError as error:
         raise LoadError(
             f"{label}: not valid {encoding} text at byte {error.start}"
-            + ("" if encoding != "utf-8" else " (declare its encoding: <?xml version=\"1.0\" encoding=\"...\"?>)")
+            + ("" if encoding != "utf-8" else ' (declare its encoding: <?xml version="1.0" encoding="..."?>)')
         ) from None
     return _ANY_DECLARATION.sub("", text.lstrip("\ufeff"), count=1), codecs.lookup(encoding).name
 
