@@ -13,6 +13,25 @@ On the Theorem: with ``gain * dt = 1`` the sensor commands the whole error each 
 the error of MCA1 maps as e <- G e (eq. 40 with β = 1), so |λ(G)| < 1 is the exact test.
 With smaller ``gain * dt`` the step is e <- (I - gain dt (I - G)) e: |λ| < 1 remains
 sufficient, and only Re λ < 1 is needed as gain dt -> 0.
+
+Stop rules, on the error measure e = |position error| + |rotation error| (m + rad, the two
+norms ``tol`` applies to):
+
+- **converged**: both norms below ``tol``.
+- **diverging**: e > DIVERGENCE_FACTOR × min(e so far) + tol. Near the target the error maps
+  linearly, e_k+1 ≈ M e_k; with ρ(M) > 1 it grows geometrically, so it passes 3× its minimum
+  after ln 3 / ln ρ steps (12 steps at ρ = 1.1). With ρ(M) < 1 it can still grow for a while
+  (M is not normal; far from the target the map is not linear), by at most the condition
+  number of M's eigenvectors: a factor of 3 over the best error is past what a convergent run
+  shows in pinrate's robots and tests, and cheap to detect early.
+- **stalled**: e has not fallen below (1 - STALL_IMPROVEMENT) × its value at the last
+  improvement for ``stall_time`` seconds of simulated time (default: max(1 s, 5 / gain), five
+  time constants of the first-order error decay e(t) = e0 exp(-gain t) that an exact solver
+  gives). Every continuing window improves e by 1 %, and e cannot fall below ``tol`` without
+  converging, so a run ends after at most ln(e0 / tol) / ln(1 / 0.99) windows whatever
+  ``max_steps`` is.
+- **joint limit**, **singular**: from the step (:class:`~.status.Status`).
+- **max steps**: ``max_steps`` ran out.
 """
 
 from __future__ import annotations
@@ -22,6 +41,7 @@ import math
 import numpy as np
 
 from ..checks import check_count, check_positive
+from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from .controller import MAX_ANGULAR_SPEED, MAX_LINEAR_SPEED, Controller, Observation, PoseGoal, error_norms
@@ -30,6 +50,15 @@ from .trajectory import Trajectory
 
 DIVERGENCE_FACTOR = 3.0
 """Stop as diverging once position + orientation error exceeds this times its minimum so far."""
+
+STALL_IMPROVEMENT = 0.01
+"""The relative fall of the error that counts as progress for the stall rule."""
+
+STALL_TIME_CONSTANTS = 5.0
+"""Default stall window in time constants (1 / gain) of the error's decay; at least 1 s."""
+
+MIN_TOL = 1e-12
+"""Smallest ``tol`` (m and rad): finer than double precision resolves a pose of a 1 m arm."""
 
 
 def servo(
@@ -45,13 +74,16 @@ def servo(
     tol: float = 1e-4,
     max_linear_speed: float = MAX_LINEAR_SPEED,
     max_angular_speed: float = MAX_ANGULAR_SPEED,
+    stall_time: float | None = None,
 ) -> Trajectory:
     """Servo the tip from q0 to ``target`` (4x4 pose in the world, or pinocchio.SE3).
 
     Stops when the norms of the controlled position error (m) and rotation error (rad) are
-    both below ``tol`` (converged), or with a reason: the error grew past
-    DIVERGENCE_FACTOR times its best (diverging), a partition joint reached a position limit
-    (q is clamped there), a square block became singular, or ``max_steps`` ran out.
+    both below ``tol`` (converged), or with a reason (see the module's stop rules): the error
+    grew past DIVERGENCE_FACTOR times its best (diverging), it has not improved by
+    STALL_IMPROVEMENT for ``stall_time`` seconds (stalled; default max(1 s, 5 / gain)), a
+    partition joint reached a position limit (q is clamped there), a square block became
+    singular, or ``max_steps`` ran out.
     """
     controller = Controller(
         robot,
@@ -64,7 +96,12 @@ def servo(
     q = robot.check_q(q0)
     goal = PoseGoal.of(target, gain)
     tol = check_positive(tol, "tol")
+    if tol < MIN_TOL:
+        raise InputError(f"tol must be at least {MIN_TOL:g} (m and rad), got {tol!r}")
     max_steps = check_count(max_steps, "max_steps")
+    if stall_time is None:
+        stall_time = max(1.0, STALL_TIME_CONSTANTS / goal.gain)
+    stall_steps = math.ceil(check_positive(stall_time, "stall_time") / controller.dt)
     m = controller.index.m
 
     configurations, rates_log, status = [q], [], []
@@ -79,6 +116,7 @@ def servo(
         return observation
 
     best = math.inf
+    progress, progress_step = math.inf, 0  # the error at the last 1 % improvement, and when
     reason, final = "", ""
     for step_number in range(max_steps + 1):
         observation = record(q)
@@ -91,6 +129,15 @@ def servo(
             final = "diverging"
             growth = f"error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best {best:.4g}"
             reason = f"diverging: {growth} at step {step_number}"
+            break
+        if total < (1.0 - STALL_IMPROVEMENT) * progress:
+            progress, progress_step = total, step_number
+        elif step_number - progress_step >= stall_steps:
+            final = "stalled"
+            reason = (
+                f"stalled: error {total:.4g} (m + rad) has not improved by {STALL_IMPROVEMENT:.0%} on "
+                f"{progress:.4g} (step {progress_step}) for {stall_steps * controller.dt:g} s, at step {step_number}"
+            )
             break
         if step_number == max_steps:
             final, reason = "max steps", f"max_steps ({max_steps}) reached"

@@ -19,7 +19,8 @@ class Trajectory:
         orientation_error: norm of the controlled rotation error (rad), (N,).
         spectral_radius: ρ of the smaller of G and H (inf where A or W is singular), (N,).
         status: per configuration, "moving", "saturated" (speed limit active) or the final
-            state ("converged", "diverging", "joint limit", "singular", "max steps").
+            state ("converged", "diverging", "stalled", "joint limit", "singular",
+            "max steps"; see :mod:`pinrate.control.servo_loop`).
         joint_rates: the rates applied after each configuration but the last, (N - 1, nv).
         converged: both errors below tol at the last configuration.
         reason: why the run stopped, in words.
