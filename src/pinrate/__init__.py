@@ -5,17 +5,37 @@ the motion control algorithms MCA1/MCA2/MCA3 (eq. 23-54) and their convergence T
 and a closed-loop servo, all on Pinocchio. The public API is listed in ``__all__``; the
 subpackages, bottom to top: ``kinematics``, ``robots`` and ``solvers``, ``theorem``,
 ``control``, ``viewer`` and ``analysis``, ``papers``, ``cli``.
+
+The names are imported on first use (PEP 562), so ``import pinrate`` and the command line
+start without loading Pinocchio until they need it.
 """
 
-from . import robots
-from .control import Trajectory, servo
-from .errors import FrameError, InputError, LoadError, PinrateError, SingularBlockError
-from .kinematics import Partition, Robot
-from .robots import load
-from .solvers import ALGORITHMS, joint_rates
-from .theorem import Convergence, ConvergenceSample, convergence, sample_convergence
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.2.0.dev0"
+
+# Public name -> the subpackage that defines it.
+_SOURCES = {
+    "ALGORITHMS": "solvers",
+    "Convergence": "theorem",
+    "ConvergenceSample": "theorem",
+    "FrameError": "errors",
+    "InputError": "errors",
+    "LoadError": "errors",
+    "Partition": "kinematics",
+    "PinrateError": "errors",
+    "Robot": "kinematics",
+    "SingularBlockError": "errors",
+    "Trajectory": "control",
+    "convergence": "theorem",
+    "joint_rates": "solvers",
+    "load": "robots",
+    "sample_convergence": "theorem",
+    "servo": "control",
+}
 
 __all__ = [
     "ALGORITHMS",
@@ -37,3 +57,27 @@ __all__ = [
     "sample_convergence",
     "servo",
 ]
+
+if TYPE_CHECKING:
+    from . import robots
+    from .control import Trajectory, servo
+    from .errors import FrameError, InputError, LoadError, PinrateError, SingularBlockError
+    from .kinematics import Partition, Robot
+    from .robots import load
+    from .solvers import ALGORITHMS, joint_rates
+    from .theorem import Convergence, ConvergenceSample, convergence, sample_convergence
+
+
+def __getattr__(name: str) -> Any:
+    source = _SOURCES.get(name)
+    if source is None:
+        if name == "robots":
+            return importlib.import_module(".robots", __name__)
+        raise AttributeError(f"module 'pinrate' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{source}", __name__), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

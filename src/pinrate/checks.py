@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -121,3 +123,32 @@ def as_pose(target: object) -> pin.SE3:
     if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0]):
         raise InputError("target's last row must be [0, 0, 0, 1]")
     return pin.SE3(rotation, matrix[:3, 3])
+
+
+def check_output_folder(path: str | os.PathLike[str], what: str) -> Path:
+    """A folder to write into, created if missing; InputError naming ``what`` when the path
+    is a file, cannot be created or is not writable."""
+    folder = Path(path).expanduser()
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"{what} {str(folder)!r} exists and is not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise InputError(f"{what} {str(folder)!r} cannot be created: {error.strerror or error}") from None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(f"{what} {str(folder)!r} is not writable")
+    return folder
+
+
+def check_output_file(path: str | os.PathLike[str], what: str) -> Path:
+    """A file path to write (an existing file is replaced); InputError naming ``what`` when it
+    is a folder, its folder is missing, or either is not writable."""
+    target = Path(path).expanduser()
+    if target.is_dir():
+        raise InputError(f"{what} {str(target)!r} is a folder; give a file name")
+    folder = target.parent
+    if not folder.is_dir():
+        raise InputError(f"{what} {str(target)!r}: the folder {str(folder)!r} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK) or (target.exists() and not os.access(target, os.W_OK)):
+        raise InputError(f"{what} {str(target)!r} is not writable")
+    return target

@@ -50,6 +50,10 @@ class ViewerError(PinrateError):
     """The Meshcat server could not be started or reached."""
 
 
+class SchedulerError(PinrateError):
+    """A Dask scheduler could not be reached."""
+
+
 def choices_hint(name: str, valid: Iterable[str], *, limit: int = 40) -> str:
     """A ' Did you mean …? Known: …' suffix listing the closest or all valid names."""
     valid = list(valid)

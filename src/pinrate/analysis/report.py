@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import check_output_folder
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..theorem.sampling import ConvergenceSample, sample_convergence
@@ -163,8 +164,7 @@ def analyze(
 
 def write_report(report: Report, folder: str | Path) -> Path:
     """Write ``report.md`` and its PNGs into ``folder``; returns the Markdown path."""
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
+    out = check_output_folder(folder, "report folder")
     name = report.robot.name
     if report.region is not None:
         report.files["region map"] = plots.region_map_png(

@@ -1,5 +1,9 @@
-"""The ``pinrate`` command line: ``list``, ``demo``, ``analyze`` and ``paper``."""
+"""The ``pinrate`` command line: ``list``, ``demo``, ``analyze`` and ``paper``.
 
-from .commands import build_parser, main
+``main`` is the console script's entry point; this package imports nothing heavy until it
+runs (see :mod:`.entry`).
+"""
 
-__all__ = ["build_parser", "main"]
+from .entry import main
+
+__all__ = ["main"]

@@ -1,4 +1,4 @@
-"""The ``pinrate`` command line: ``list``, ``demo``, ``analyze`` and ``paper``."""
+"""The subcommands of ``pinrate``: ``list``, ``demo``, ``analyze`` and ``paper``, and their parser."""
 
 from __future__ import annotations
 
@@ -6,21 +6,25 @@ import argparse
 import logging
 import sys
 import time
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
 
 from .. import analysis, robots
+from ..checks import check_output_file, check_output_folder
 from ..control.servo_loop import servo
 from ..control.trajectory import Trajectory
 from ..errors import InputError, PinrateError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..kinematics.targets import nearby_target
+from ..kinematics.urdf_structure import MAX_JOINTS
 from ..papers import markdown, results
 from ..robots import EXAMPLE_ROBOTS, ROBOT_NAMES, example_robot_data_share, load
 from ..solvers.registry import ALGORITHMS
+from .arguments import Parser, count, finite, positive, warn
 
 
 def _list(_: argparse.Namespace) -> int:
@@ -79,13 +83,18 @@ def _targets(args: argparse.Namespace, robot: Robot, partition: Partition) -> li
 
 
 def _load(args: argparse.Namespace) -> Robot:
-    robot = load(args.robot, tip=args.tip, sensor=args.sensor)
+    robot = load(args.robot, tip=args.tip, sensor=args.sensor, max_joints=args.max_joints)
     if robot.tip_choice != "given":
         print(f"tip        {robot.tip} ({robot.tip_choice}; --tip to choose another)")
     return robot
 
 
 def _demo(args: argparse.Namespace) -> int:
+    record = None
+    if args.record:
+        if args.no_viewer:
+            raise InputError("--record writes the viewer's replay: drop --no-viewer")
+        record = check_output_file(args.record, "--record")
     robot = _load(args)
     partition = Partition.auto(robot)
     targets = _targets(args, robot, partition)
@@ -93,7 +102,11 @@ def _demo(args: argparse.Namespace) -> int:
     if not args.no_viewer:
         from ..viewer import Viewer  # meshcat is imported only when a view is asked for
 
-        viewer = Viewer(robot, host=args.host, open_browser=args.open)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            viewer = Viewer(robot, host=args.host, open_browser=args.open)
+        for warning in caught:
+            warn(str(warning.message))
         print(f"Meshcat viewer: {viewer.url}", flush=True)
     try:
         q = robot.home()
@@ -128,15 +141,16 @@ def _demo(args: argparse.Namespace) -> int:
             all_converged &= trajectory.converged
             q = trajectory.q[-1]
         if viewer is not None:
-            if args.record:
-                print(f"recorded   {viewer.save_html(args.record)} ({viewer.recorded_frames} frames)")
+            if record is not None:
+                print(f"recorded   {viewer.save_html(record)} ({viewer.recorded_frames} frames)")
             if sys.stdin.isatty() and sys.stdout.isatty():
                 print("The view stays up: Ctrl-C to quit.", flush=True)
-                while True:
-                    time.sleep(3600)
+                try:
+                    while True:
+                        time.sleep(3600)
+                except KeyboardInterrupt:  # the documented way to leave the view: not an interruption
+                    pass
         return 0 if all_converged else 1
-    except KeyboardInterrupt:
-        return 0
     finally:
         if viewer is not None:
             viewer.close()
@@ -159,6 +173,7 @@ def _partition_from_args(args: argparse.Namespace, robot: Robot) -> Partition:
 
 
 def _analyze(args: argparse.Namespace) -> int:
+    out = check_output_folder(args.out, "--out")  # before the long part of the work
     robot = _load(args)
     partition = _partition_from_args(args, robot)
     factory = None
@@ -191,7 +206,7 @@ def _analyze(args: argparse.Namespace) -> int:
     )
     if factory is not None:
         report.sweep = analysis.sweep(factory, parameter, low, high, samples=max(1000, args.samples // 25))
-    path = analysis.write_report(report, args.out)
+    path = analysis.write_report(report, out)
     print(report.markdown(), end="")
     print(
         f"\nwritten: {path} and {', '.join(p.name for p in report.files.values())} "
@@ -205,10 +220,21 @@ def _paper(_: argparse.Namespace) -> int:
     return 0
 
 
+def _robot_arguments(parser: argparse.ArgumentParser, tip_help: str, sensor_help: str) -> None:
+    parser.add_argument("robot", help="a name from `pinrate list` or a URDF path")
+    parser.add_argument("--tip", help=tip_help)
+    parser.add_argument("--sensor", help=sensor_help)
+    parser.add_argument(
+        "--max-joints",
+        type=count(1),
+        help=f"refuse URDFs with more moving joints (default {MAX_JOINTS}, or $PINRATE_MAX_JOINTS)",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="pinrate", description="Resolved-rate motion control for URDF arms.")
+    parser = Parser(prog="pinrate", description="Resolved-rate motion control for URDF arms.")
     parser.add_argument("-v", "--verbose", action="store_true", help="log what pinrate chooses")
-    commands = parser.add_subparsers(dest="command", required=True)
+    commands = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
 
     listing = commands.add_parser("list", help="print every robot name pinrate can load")
     listing.set_defaults(run=_list)
@@ -217,53 +243,59 @@ def build_parser() -> argparse.ArgumentParser:
     paper.set_defaults(run=_paper)
 
     analyze = commands.add_parser("analyze", help="where do MCA1/2/3 converge? report with region maps")
-    analyze.add_argument("robot", help="a name from `pinrate list` or a URDF path")
-    analyze.add_argument("--tip", help="TCP frame")
-    analyze.add_argument("--sensor", help="frame the twist is expressed in")
+    _robot_arguments(analyze, "TCP frame", "frame the twist is expressed in")
     analyze.add_argument("--arm", help="comma-separated arm joints (default: the automatic partition)")
     analyze.add_argument("--wrist", help="comma-separated wrist joints")
     analyze.add_argument("--linear", help="controlled linear axes, e.g. xy")
     analyze.add_argument("--angular", help="controlled angular axes, e.g. z")
-    analyze.add_argument("--samples", type=int, default=100_000, help="configurations for the work-volume share")
+    analyze.add_argument("--samples", type=count(1), default=100_000, help="configurations for the work-volume share")
     analyze.add_argument("--joints", nargs=2, metavar=("X", "Y"), help="the region map's two joints")
-    analyze.add_argument("--points", type=int, default=121, help="region map grid points per joint")
+    analyze.add_argument("--points", type=count(2), default=121, help="region map grid points per joint (>= 2)")
     analyze.add_argument("--sweep", metavar="PARAM=LO:HI", help="sweep a parameter of a papers' robot")
     analyze.add_argument("--out", default="analysis", help="folder for report.md and the PNGs")
-    analyze.add_argument("--workers", type=int, default=1, help="processes on this machine")
+    analyze.add_argument("--workers", type=count(1), default=1, help="processes on this machine")
     analyze.add_argument("--scheduler", help="a Dask scheduler address (needs pinrate[dask])")
-    analyze.add_argument("--seed", type=int, default=0)
+    analyze.add_argument("--seed", type=count(0), default=0, help="seed of the samples (>= 0)")
     analyze.set_defaults(run=_analyze)
 
     demo = commands.add_parser("demo", help="servo a robot from home to a target and summarise")
-    demo.add_argument("robot", help="a name from `pinrate list` or a URDF path")
-    demo.add_argument("--tip", help="TCP frame (default: the name table's, or the chain's end)")
-    demo.add_argument("--sensor", help="frame the twist is expressed in (default: the tip)")
+    _robot_arguments(
+        demo,
+        "TCP frame (default: the name table's, or the chain's end)",
+        "frame the twist is expressed in (default: the tip)",
+    )
     demo.add_argument("--algorithm", default="mca1", choices=ALGORITHMS)
     demo.add_argument(
         "--target",
         nargs=6,
-        type=float,
+        type=finite,
         metavar=("X", "Y", "Z", "R", "P", "Y"),
         help="target tip pose in the world: metres and roll-pitch-yaw radians",
     )
-    demo.add_argument("--seed", type=int, default=0, help="seed of the default random target")
-    demo.add_argument("--dt", type=float, default=0.01, help="control period in seconds")
-    demo.add_argument("--gain", type=float, default=1.0, help="twist per unit pose error (1/s)")
-    demo.add_argument("--max-steps", type=int, default=2000)
-    demo.add_argument("--tol", type=float, default=1e-4, help="convergence tolerance (m and rad)")
-    demo.add_argument("--targets", type=int, default=1, help="number of random targets, one after the other")
-    demo.add_argument("--speed", type=float, default=1.0, help="playback speed in the viewer (x real time)")
+    demo.add_argument("--seed", type=count(0), default=0, help="seed of the default random target (>= 0)")
+    demo.add_argument("--dt", type=positive, default=0.01, help="control period in seconds")
+    demo.add_argument("--gain", type=positive, default=1.0, help="twist per unit pose error (1/s)")
+    demo.add_argument("--max-steps", type=count(0), default=2000)
+    demo.add_argument("--tol", type=positive, default=1e-4, help="convergence tolerance (m and rad)")
+    demo.add_argument("--targets", type=count(1), default=1, help="number of random targets, one after the other")
+    demo.add_argument("--speed", type=positive, default=1.0, help="playback speed in the viewer (x real time)")
     demo.add_argument("--open", action="store_true", help="open the viewer in the default browser")
     demo.add_argument("--record", metavar="HTML", help="write a standalone HTML replay of the whole run")
     demo.add_argument(
-        "--host", default="127.0.0.1", help="address the Meshcat server listens on (default: this machine only)"
+        "--host",
+        default="127.0.0.1",
+        help="address the Meshcat server listens on (default: this machine only; another one is warned about)",
     )
     demo.add_argument("--no-viewer", action="store_true", help="headless: print the summary only")
     demo.set_defaults(run=_demo)
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def run(argv: Sequence[str] | None = None) -> int:
+    """Parse ``argv`` and run the command; a refused input is one line on stderr and 2.
+
+    The process-level concerns (signals, interrupts, closed pipes) are :func:`.entry.main`'s.
+    """
     args = build_parser().parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="pinrate: %(message)s")
     try:
@@ -271,7 +303,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PinrateError as error:
         print(f"pinrate: error: {error}", file=sys.stderr)
         return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -10,6 +10,7 @@ worker process (:func:`pinrate.kinematics.urdf.robot_from_spec`).
 from __future__ import annotations
 
 import os
+import signal
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any, TypeVar
@@ -17,9 +18,12 @@ from typing import Any, TypeVar
 from tqdm.auto import tqdm
 
 from ..checks import check_count
-from ..errors import InputError
+from ..errors import InputError, SchedulerError
 
 T = TypeVar("T")
+
+SCHEDULER_TIMEOUT = 5.0
+"""Seconds to wait for a Dask scheduler before a SchedulerError."""
 
 
 def _progress(total: int, description: str, enabled: bool | None) -> Any:
@@ -70,16 +74,25 @@ def map_chunks(
                 if owned:
                     client.close()
         elif workers > 1 and len(chunks) > 1:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
+            # Ctrl-C reaches the whole process group: the workers leave it to this process,
+            # which cancels what is queued, instead of each printing a traceback.
+            pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_interrupts)
+            try:
                 futures = {pool.submit(function, *arguments, chunk): i for i, chunk in enumerate(chunks)}
                 for future in as_completed(futures):
                     results[futures[future]] = future.result()
                     bar.update(1)
+            finally:
+                pool.shutdown(wait=True, cancel_futures=True)
         else:
             for i, chunk in enumerate(chunks):
                 results[i] = function(*arguments, chunk)
                 bar.update(1)
     return results
+
+
+def _ignore_interrupts() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _dask_client(scheduler: object) -> tuple[Any, bool]:
@@ -92,4 +105,10 @@ def _dask_client(scheduler: object) -> tuple[Any, bool]:
     address = getattr(scheduler, "scheduler_address", scheduler)
     if not isinstance(address, str):
         raise InputError(f"scheduler must be an address, a distributed.Client or a cluster, not {scheduler!r}")
-    return Client(address), True
+    try:
+        return Client(address, timeout=SCHEDULER_TIMEOUT), True
+    except ValueError as error:
+        raise InputError(f"scheduler address {address!r} is not valid: {error}") from None
+    except OSError as error:
+        reason = f"no Dask scheduler reachable at {address!r} within {SCHEDULER_TIMEOUT:g} s: {error}"
+        raise SchedulerError(reason) from None

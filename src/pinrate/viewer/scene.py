@@ -33,7 +33,7 @@ import numpy as np
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
-from ..checks import as_pose
+from ..checks import as_pose, check_output_file
 from ..control.trajectory import Trajectory
 from ..kinematics.manipulator import Robot
 from .server import MeshcatServer
@@ -208,7 +208,7 @@ class Viewer:
         """A standalone HTML page of the scene that replays every recorded frame, offline."""
         if self._frames:
             self.meshcat.set_animation(self.animation(fps), play=True, repetitions=10**9 if loop else 1)
-        target = Path(path)
+        target = check_output_file(path, "replay file")
         target.write_text(self.meshcat.static_html(), encoding="utf-8")
         return target
 

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import atexit
+import ipaddress
 import os
+import socket
 import subprocess
 import sys
 import time
+import warnings
 
 from ..errors import ViewerError
 
@@ -14,11 +17,39 @@ SERVER_START_TIMEOUT = 30.0
 """Seconds the server process has to report its URLs."""
 
 
+def check_host(host: object) -> str:
+    """``host`` if this machine can listen on it; ViewerError naming it otherwise. Warns when
+    it is not a loopback address (anyone who reaches this machine can open the viewer)."""
+    if not isinstance(host, str) or not host:
+        raise ViewerError(f"host must be an address or host name of this machine, got {host!r}")
+    try:
+        candidates = socket.getaddrinfo(host, 0, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as error:
+        reason = getattr(error, "strerror", None) or str(error)
+        raise ViewerError(f"host {host!r} is not a known address ({reason})") from None
+    failure = ""
+    for family, kind, protocol, _, address in candidates:
+        try:
+            with socket.socket(family, kind, protocol) as probe:
+                probe.bind(address)
+        except OSError as error:
+            failure = error.strerror or str(error)
+            continue
+        if not ipaddress.ip_address(address[0].split("%")[0]).is_loopback:
+            warnings.warn(
+                f"the viewer listens on {host} ({address[0]}): anyone who can reach this machine can open it",
+                stacklevel=3,
+            )
+        return host
+    raise ViewerError(f"host {host!r} is not an address of this machine: cannot listen there ({failure})")
+
+
 class MeshcatServer:
     """A Meshcat server subprocess bound to ``host``; closed on :meth:`close`, on exit, or
     by itself when this process dies (it watches its parent)."""
 
     def __init__(self, host: str = "127.0.0.1") -> None:
+        host = check_host(host)
         command = [
             sys.executable,
             "-u",

@@ -1,0 +1,58 @@
+"""Argument types for the command line: every value is checked as it is parsed, so a bad one
+ends in one line ``pinrate: error: ...`` (exit 2) before any work starts."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import NoReturn
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse, with its usage errors on one line: ``pinrate: error: <command>: <message>``."""
+
+    def error(self, message: str) -> NoReturn:
+        command = self.prog.removeprefix("pinrate").strip()
+        where = f"{command}: " if command else ""
+        self.exit(2, f"pinrate: error: {where}{message} (see `{self.prog} --help`)\n")
+
+
+def count(minimum: int) -> type[int]:
+    """An argparse type: an integer >= ``minimum``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {value}")
+        return value
+
+    parse.__name__ = f"integer >= {minimum}"
+    return parse  # type: ignore[return-value]
+
+
+def positive(text: str) -> float:
+    """An argparse type: a finite number > 0."""
+    value = finite(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def finite(text: str) -> float:
+    """An argparse type: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+    return value
+
+
+def warn(message: str) -> None:
+    """One line ``pinrate: warning: ...`` on stderr."""
+    print(f"pinrate: warning: {message}", file=sys.stderr, flush=True)
