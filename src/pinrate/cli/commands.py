@@ -103,7 +103,7 @@ def _demo(args: argparse.Namespace) -> int:
         from ..viewer import Viewer  # meshcat is imported only when a view is asked for
 
         with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
+            warnings.simplefilter("always", UserWarning)
             viewer = Viewer(robot, host=args.host, open_browser=args.open)
         for warning in caught:
             warn(str(warning.message))
@@ -296,7 +296,10 @@ def run(argv: Sequence[str] | None = None) -> int:
 
     The process-level concerns (signals, interrupts, closed pipes) are :func:`.entry.main`'s.
     """
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as finished:  # --help, or a usage error already printed on one line
+        return finished.code if isinstance(finished.code, int) else 2
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="pinrate: %(message)s")
     try:
         return int(args.run(args))

@@ -130,14 +130,21 @@ def _stderr_captured() -> Iterator[list[str]]:
 
 
 def _build_model(text: str, label: str) -> pin.Model:
+    """Pinocchio's model of the URDF; urdfdom's reasons (which it writes to the C++ stderr)
+    become the LoadError's message, or a warning when it built the model anyway (a
+    malformed inertial or visual element is skipped, not refused)."""
+    model, failure = None, ""
     with _stderr_captured() as messages:
         try:
-            return pin.buildModelFromXML(text)
+            model = pin.buildModelFromXML(text)
         except (ValueError, RuntimeError) as error:
             failure = " ".join(str(error).split())
     reasons = [line.strip().removeprefix("Error:").strip() for line in messages if line.strip().startswith("Error:")]
-    detail = "; ".join(reasons) or failure
-    raise LoadError(f"{label}: Pinocchio could not build a model: {detail}")
+    if model is None:
+        raise LoadError(f"{label}: Pinocchio could not build a model: {'; '.join(reasons) or failure}")
+    if reasons:
+        warnings.warn(f"{label}: urdfdom skipped parts of the file: {'; '.join(reasons)}", stacklevel=4)
+    return model
 
 
 def robot_from_urdf(
