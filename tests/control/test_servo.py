@@ -154,11 +154,60 @@ def test_bad_targets(ur5: pinrate.Robot, target: object, match: str) -> None:
         ("max_steps", -1),
         ("gain", True),
         ("max_linear_speed", 0.0),
+        ("tol", 1e-13),
+        ("gain", 1e300),
+        ("dt", 1e7),
+        ("max_steps", 2.5),
+        ("stall_time", 0.0),
     ],
 )
 def test_bad_settings(ur5: pinrate.Robot, keyword: str, value: float) -> None:
     with pytest.raises(pinrate.InputError, match=keyword):
         pinrate.servo(ur5, ur5.home(), ur5.pose(ur5.home()), **{keyword: value})
+
+
+@pytest.mark.parametrize("position", [1e7, 1e305, -1e308])
+def test_targets_beyond_the_physical_bound_are_refused(ur5: pinrate.Robot, position: float) -> None:
+    target = np.eye(4)
+    target[0, 3] = position
+    with pytest.raises(pinrate.InputError, match="physical bound"):
+        pinrate.servo(ur5, ur5.home(), target)
+
+
+TWO_LINK_CONTINUOUS = """<robot name="reach_two"><link name="a"/><link name="b"/><link name="c"/><link name="tip"/>
+<joint name="shoulder" type="continuous"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
+<joint name="elbow" type="continuous"><parent link="b"/><child link="c"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/></joint>
+<joint name="tool" type="fixed"><parent link="c"/><child link="tip"/><origin xyz="1 0 0"/></joint></robot>"""
+
+
+@pytest.mark.parametrize(("algorithm", "stall_time"), [("exact", None), ("dls", 0.5), ("exact", 2.0)])
+def test_an_unreachable_target_stalls_whatever_max_steps(tmp_path, algorithm: str, stall_time: float | None) -> None:
+    # Continuous joints have no limit to stop at: the arm (reach 2 m) stretches towards a
+    # target 5 m away and stays there. Before the stall rule, max_steps=10**12 ran for ever.
+    path = tmp_path / "reach_two.urdf"
+    path.write_text(TWO_LINK_CONTINUOUS, encoding="utf-8")
+    robot = pinrate.load(path)
+    partition = Partition(("shoulder", "elbow"), (), linear="xy", angular="")
+    q0 = np.array([math.cos(0.3), math.sin(0.3), math.cos(0.8), math.sin(0.8)])
+    target = np.eye(4)
+    target[:3, 3] = [5.0, 0.0, 0.0]
+    gain, dt = 1.0, 0.01
+    trajectory = pinrate.servo(
+        robot, q0, target, algorithm=algorithm, partition=partition, max_steps=10**12, stall_time=stall_time
+    )
+    assert trajectory.status[-1] == "stalled" and trajectory.reason.startswith("stalled")
+    window = round((max(1.0, 5.0 / gain) if stall_time is None else stall_time) / dt)
+    error = trajectory.position_error + trajectory.orientation_error
+    # The documented rule, replayed on the record: progress is a 1 % fall below the error at
+    # the last progress; the run stops the first time a whole window passes without any.
+    anchor, anchor_step = math.inf, 0
+    for step, value in enumerate(error):
+        if value < 0.99 * anchor:
+            anchor, anchor_step = value, step
+        elif step - anchor_step >= window:
+            break
+    assert step == len(error) - 1 and step - anchor_step == window
+    assert np.linalg.norm(robot.pose(trajectory.q[-1])[:2, 3]) > 1.75  # stretched towards the target
 
 
 def test_bad_q0(ur5: pinrate.Robot) -> None:

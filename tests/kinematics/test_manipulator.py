@@ -219,3 +219,45 @@ def test_missing_mesh_warns_but_kinematics_work(tmp_path) -> None:
 
 def test_example_robot_meshes_load(ur5: pinrate.Robot) -> None:
     assert ur5.visual_model.ngeoms >= 6
+
+
+@pytest.mark.parametrize("value", [1.0 + 1e6, -1e12, 1e305])
+def test_q_beyond_the_physical_bound_names_the_joint(ur5: pinrate.Robot, value: float) -> None:
+    q = ur5.home()
+    q[4] = value
+    with pytest.raises(pinrate.InputError, match=r"physical bound.*q\[4\] \(wrist_2_joint\)"):
+        ur5.jacobian(q)
+
+
+@pytest.mark.parametrize("pair", [(2.0, 0.0), (0.0, 0.0), (0.6, 0.6), (1.0 + 1e-5, 0.0)])
+def test_a_continuous_pair_off_the_unit_circle_is_refused(pair: tuple[float, float]) -> None:
+    # Before: (2, 0) was accepted, the tip rotation had det 4 and jacobian() and kinematics()
+    # disagreed by 3.0.
+    kinova = pinrate.load("kinova")
+    q = kinova.home()
+    joint = kinova.model.joints[kinova.joint_id(kinova.joint_names[0])]
+    assert joint.nq == 2  # the first joint is continuous
+    q[joint.idx_q : joint.idx_q + 2] = pair
+    for call in (kinova.pose, kinova.jacobian):
+        with pytest.raises(pinrate.InputError, match=rf"{kinova.joint_names[0]}.*unit \(cos, sin\)"):
+            call(q)
+
+
+def test_a_continuous_pair_within_the_tolerance_is_accepted() -> None:
+    kinova = pinrate.load("kinova")
+    q = kinova.home()
+    q[0:2] = (math.cos(0.4) * (1 + 1e-9), math.sin(0.4))
+    assert np.isfinite(kinova.jacobian(q)).all()
+
+
+def test_a_robot_with_no_moving_joint_is_a_load_error() -> None:
+    model = pin.Model()
+    model.addFrame(pin.Frame("plate", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
+    with pytest.raises(pinrate.LoadError, match="no moving joint"):
+        pinrate.Robot(model, name="plate")
+
+
+@pytest.mark.parametrize("tip", ["base_link", "world", "base"])
+def test_a_tip_fixed_to_the_world_is_a_load_error_naming_it(tip: str) -> None:
+    with pytest.raises(pinrate.LoadError, match=rf"tip frame '{tip}' has no moving joint between it and the world"):
+        pinrate.load("ur5", tip=tip)
