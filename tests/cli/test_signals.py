@@ -1,0 +1,79 @@
+"""The process owns its signals: Ctrl-C at any moment after start-up ends with exit 130 and no
+traceback, also when SIGINT was inherited ignored; SIGTERM cleans up; a closed pipe is quiet
+(pinrate.cli.entry)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+
+import pytest
+
+pytestmark = pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="needs Linux /proc")
+
+COMMAND = [sys.executable, "-m", "pinrate.cli"]
+
+
+def ignore_sigint() -> None:
+    # What a background job of a non-interactive shell inherits (`bash -c "cmd &"`).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def catches(pid: int, signum: int) -> bool:
+    """Whether the process has a handler installed for ``signum`` (its SigCgt mask)."""
+    with open(f"/proc/{pid}/status", encoding="ascii") as status:
+        for line in status:
+            if line.startswith("SigCgt:"):
+                return bool(int(line.split()[1], 16) >> (signum - 1) & 1)
+    return False
+
+
+def start(argv: list[str], preexec: Callable[[], None] | None = None) -> subprocess.Popen[str]:
+    """The CLI in a child, returned once its entry point owns the signals: Python catches
+    SIGINT from start-up on, SIGTERM only once pinrate's main runs. What comes before that
+    is CPython's own site initialisation, which no program can guard."""
+    process = subprocess.Popen(
+        [*COMMAND, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=preexec
+    )
+    deadline = time.monotonic() + 30
+    while not catches(process.pid, signal.SIGTERM):
+        assert process.poll() is None and time.monotonic() < deadline, process.communicate()
+        time.sleep(0.001)
+    return process
+
+
+@pytest.mark.parametrize("inherited", ["default", "ignored"])
+@pytest.mark.parametrize("delay", [0.0, 0.05, 0.15, 0.3, 0.6, 1.2])
+def test_ctrl_c_at_any_moment_exits_130_without_a_traceback(inherited: str, delay: float) -> None:
+    # From the entry point on: importing Pinocchio and matplotlib (about a second), loading,
+    # the servo runs; 40 targets take far longer than the longest delay.
+    process = start(
+        ["demo", "ur5", "--no-viewer", "--targets", "40"], ignore_sigint if inherited == "ignored" else None
+    )
+    time.sleep(delay)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=30)
+    assert process.returncode == 130, err[-2000:]
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "pinrate: interrupted"
+
+
+def test_sigterm_ends_the_run_and_says_so() -> None:
+    process = start(["demo", "ur5", "--no-viewer", "--targets", "40"])
+    time.sleep(0.5)
+    process.terminate()
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 143 and "Traceback" not in err, err[-2000:]
+
+
+def test_a_closed_output_pipe_is_quiet() -> None:
+    # `pinrate list | head -0`: the reader is gone before the first line is written.
+    process = subprocess.Popen([*COMMAND, "list"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process.stdout.close()
+    err = process.stderr.read().decode()
+    process.stderr.close()
+    assert process.wait(timeout=30) == 141
+    assert "Traceback" not in err and "BrokenPipeError" not in err, err
