@@ -56,7 +56,7 @@ def test_ctrl_c_at_any_moment_exits_130_without_a_traceback(inherited: str, dela
     )
     time.sleep(delay)
     process.send_signal(signal.SIGINT)
-    out, err = process.communicate(timeout=30)
+    _, err = process.communicate(timeout=30)
     assert process.returncode == 130, err[-2000:]
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "pinrate: interrupted"
 

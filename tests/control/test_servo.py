@@ -176,7 +176,8 @@ def test_targets_beyond_the_physical_bound_are_refused(ur5: pinrate.Robot, posit
 
 TWO_LINK_CONTINUOUS = """<robot name="reach_two"><link name="a"/><link name="b"/><link name="c"/><link name="tip"/>
 <joint name="shoulder" type="continuous"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
-<joint name="elbow" type="continuous"><parent link="b"/><child link="c"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/></joint>
+<joint name="elbow" type="continuous"><parent link="b"/><child link="c"/><origin xyz="1 0 0"/>
+<axis xyz="0 0 1"/></joint>
 <joint name="tool" type="fixed"><parent link="c"/><child link="tip"/><origin xyz="1 0 0"/></joint></robot>"""
 
 

@@ -196,7 +196,7 @@ def test_xacro_files_are_refused_with_the_command_to_expand_them(tmp_path: Path)
     for name in ("arm.urdf.xacro", "arm.urdf"):
         path = tmp_path / name
         path.write_text(macro, encoding="utf-8")
-        with pytest.raises(pinrate.LoadError, match="xacro file.*expand it first"):
+        with pytest.raises(pinrate.LoadError, match=r"xacro file.*expand it first"):
             pinrate.load(path)
     undeclared = tmp_path / "undeclared.urdf"
     undeclared.write_text('<robot name="r"><xacro:include filename="x"/></robot>', encoding="utf-8")
