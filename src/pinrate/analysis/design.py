@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition
+from ..kinematics.partition import Partition, partition_for
 from ..theorem.sampling import spectral_radius_at
 
 _DEPENDENCE_TOL = 1e-9
@@ -35,7 +35,7 @@ def independent_joints(
     Checked by moving each joint to random values at random configurations: a joint is
     independent when no move changes any entry of J by more than 1e-9 (relative).
     """
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     generator = np.random.default_rng(rng)
     base = robot.sample_configurations(samples, generator, joints=partition.joints)
     jacobians = np.array([robot.jacobian_unchecked(q) for q in base])
@@ -87,7 +87,7 @@ def grid_check(
     Default joints: the partition's joints that J depends on. Joints off the grid stay at
     the robot's home configuration.
     """
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     if joints is None:
         skip = set(independent_joints(robot, partition=partition))
         joints = [j for j in partition.joints if j not in skip]

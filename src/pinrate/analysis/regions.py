@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition
+from ..kinematics.partition import Partition, partition_for
 from ..theorem.sampling import spectral_radius_at
 
 _SENSITIVITY_BASES = 24  # base configurations when ranking joints by their effect on ρ
@@ -35,7 +35,7 @@ class RegionMap:
 
 def joint_sensitivity(robot: Robot, *, partition: Partition | None = None, rng: int = 5) -> dict[str, float]:
     """How much ρ changes when each partition joint moves alone (mean spread, ρ clipped at 4)."""
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     generator = np.random.default_rng(rng)
     bases = robot.sample_configurations(_SENSITIVITY_BASES, generator, joints=partition.joints)
     sensitivity = {}
@@ -50,7 +50,7 @@ def joint_sensitivity(robot: Robot, *, partition: Partition | None = None, rng: 
 
 def default_map_joints(robot: Robot, *, partition: Partition | None = None) -> tuple[str, str]:
     """The two partition joints ρ varies most with (ties: chain order)."""
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     if len(partition.joints) < 2:
         raise InputError(f"a region map needs two partition joints; {robot.name!r} has {list(partition.joints)}")
     sensitivity = joint_sensitivity(robot, partition=partition)
@@ -67,7 +67,7 @@ def region_map(
     base: np.ndarray | None = None,
 ) -> RegionMap:
     """ρ over a ``points`` x ``points`` grid of two joints (default: the two ρ varies most with)."""
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     pair = tuple(joints) if joints is not None else default_map_joints(robot, partition=partition)
     if len(pair) != 2 or pair[0] == pair[1]:
         raise InputError(f"a region map needs two different joints, got {list(pair)}")

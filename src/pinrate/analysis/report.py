@@ -25,7 +25,7 @@ import numpy as np
 
 from ..checks import check_output_folder
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition
+from ..kinematics.partition import Partition, partition_for
 from ..theorem.sampling import ConvergenceSample, sample_convergence
 from . import design, plots
 from .regions import RegionMap, region_map, tcp_positions
@@ -143,7 +143,7 @@ def analyze(
     tcp_samples: int = 3000,
 ) -> Report:
     """Compute the whole report (no files written; see :func:`write_report`)."""
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     sample = sample_convergence(
         robot, samples, partition=partition, rng=rng, workers=workers, scheduler=scheduler, progress=progress
     )

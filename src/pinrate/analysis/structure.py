@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition
+from ..kinematics.partition import Partition, partition_for
 
 _ZERO = 1e-9  # an entry is zero when below this times (1 + max |J|)
 
@@ -56,7 +56,7 @@ def block_structure(
     robot: Robot, *, partition: Partition | None = None, samples: int = 64, rng: int = 11
 ) -> BlockStructure:
     """Zero patterns of A, B, U, W over ``samples`` random configurations (plus home)."""
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     configurations = np.vstack(
         [robot.home()[None, :], robot.sample_configurations(samples, rng, joints=partition.joints)]
     )

@@ -2,7 +2,9 @@
 
 Exit codes: 0 done (the demo converged), 1 the demo did not converge, 2 a refused input
 (one line ``pinrate: error: ...`` on stderr), 130 interrupted (Ctrl-C, at any moment,
-start-up included), 143 terminated (SIGTERM), 141 its output pipe closed (``| head``).
+start-up included; when the interrupt landed inside Pinocchio's import, CPython itself ends
+the process by SIGINT after pinrate's cleanup, which shells also report as 130), 143
+terminated (SIGTERM), 141 its output pipe closed (``| head``).
 
 The CLI owns SIGINT: CPython raises KeyboardInterrupt only when SIGINT was at its default
 disposition at start-up, and a background job of a non-interactive shell inherits it
@@ -26,6 +28,19 @@ TERMINATED = 143
 BROKEN_PIPE = 141
 
 
+class _Interrupts:
+    """Whether SIGINT arrived: an extension module that clears Python errors (Boost.Python
+    code run while Pinocchio imports) can swallow the KeyboardInterrupt, so the flag is
+    checked again once the imports are done."""
+
+    seen = False
+
+    @classmethod
+    def handle(cls, signum: int, frame: FrameType | None) -> None:
+        cls.seen = True
+        raise KeyboardInterrupt
+
+
 class Terminated(SystemExit):
     """Raised in the main thread on SIGTERM, so ``finally`` blocks (the viewer's server) run."""
 
@@ -40,6 +55,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         from .commands import run  # inside the guard: importing Pinocchio takes a second
 
+        if _Interrupts.seen:  # interrupted while importing, and something swallowed it
+            raise KeyboardInterrupt
         return run(argv)
     except KeyboardInterrupt:
         _quiet_print("pinrate: interrupted")
@@ -65,7 +82,8 @@ def _own_signals() -> dict[int, object]:
     if threading.current_thread() is not threading.main_thread():
         return {}
     previous = {}
-    for signum, handler in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, _terminate)):
+    _Interrupts.seen = False
+    for signum, handler in ((signal.SIGINT, _Interrupts.handle), (signal.SIGTERM, _terminate)):
         previous[signum] = signal.signal(signum, handler)
     return previous
 

@@ -28,7 +28,7 @@ import pinocchio as pin
 from ..checks import as_pose, check_positive, check_vector
 from ..errors import SingularBlockError
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition
+from ..kinematics.partition import Partition, partition_for
 from ..kinematics.spatial import pose_error, saturate
 from ..solvers import closed_form
 from ..solvers.rates import partition_rates, partition_spectral_radius
@@ -140,7 +140,7 @@ class Controller:
     ) -> None:
         self.robot = robot
         self.algorithm = check_algorithm(algorithm)
-        self.partition = Partition.auto(robot) if partition is None else partition
+        self.partition = partition_for(robot, partition)
         self.index = self.partition.resolve(robot)
         self.dt = check_positive(dt, "dt")
         self.max_linear_speed = check_positive(max_linear_speed, "max_linear_speed", allow_inf=True)

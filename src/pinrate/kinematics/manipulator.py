@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..checks import RngLike, as_rng, check_vector
+from ..checks import RngLike, as_rng, check_count, check_vector
 from ..errors import InputError, LoadError, PinrateError, choices_hint
 from .frames import default_tip_frame, resolve_frame
 
@@ -44,6 +44,14 @@ class RobotSpec:
     tip: str
     sensor: str
     name: str
+
+
+def check_robot(robot: object) -> Robot:
+    """``robot`` if it is a :class:`Robot`; InputError otherwise (a name or a path included)."""
+    if not isinstance(robot, Robot):
+        hint = " (load it first: pinrate.load(...))" if isinstance(robot, str | Path) else ""
+        raise InputError(f"robot must be a pinrate.Robot{hint}, not {type(robot).__name__}")
+    return robot
 
 
 class Robot:
@@ -167,7 +175,7 @@ class Robot:
         (nq = 2: cos, sin) by its angle in [-pi, pi]; other multi-DOF joints stay neutral.
         """
         generator = as_rng(rng)
-        samples = np.tile(self.neutral(), (count, 1))
+        samples = np.tile(self.neutral(), (check_count(count, "count"), 1))
         for joint in self.joint_names if joints is None else joints:
             if self.model.joints[self.joint_id(joint)].nv == 1:
                 self.set_joint_values(samples, joint, generator.uniform(*self.joint_range(joint), count))

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .manipulator import Robot
+from .manipulator import Robot, check_robot
 
 _AXES = "xyz"
 _ZERO_TOL = 1e-9  # a Jacobian entry counts as zero below this times (1 + max |J|)
@@ -134,7 +134,7 @@ class Partition:
 
     def resolve(self, robot: Robot) -> PartitionIndex:
         """Row and column indices of this partition in ``robot``'s Jacobian (cached per robot)."""
-        cache = _INDEX_CACHE.setdefault(robot, {})
+        cache = _INDEX_CACHE.setdefault(check_robot(robot), {})
         index = cache.get(self)
         if index is None:
             arm_columns = [c for joint in self.arm for c in robot.velocity_indices(joint)]
@@ -153,10 +153,15 @@ class Partition:
     def blocks(self, robot: Robot, J: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(A, B, U, W) of eq. 19: A = J[linear, arm], B = J[linear, wrist],
         U = J[angular, arm], W = J[angular, wrist]."""
-        jacobian = np.asarray(J, dtype=float)
+        index = self.resolve(robot)
+        try:
+            jacobian = np.asarray(J, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"J must be a (6, {robot.nv}) array of numbers, got {type(J).__name__}") from None
         if jacobian.shape != (6, robot.nv):
             raise InputError(f"J must have shape (6, {robot.nv}) for robot {robot.name!r}, got {jacobian.shape}")
-        index = self.resolve(robot)
+        if not np.isfinite(jacobian).all():
+            raise InputError("J contains NaN or inf")
         return split_blocks(jacobian[np.ix_(index.rows, index.columns)], index.m, len(index.arm_columns))
 
     def __str__(self) -> str:
@@ -180,7 +185,7 @@ class Partition:
         With n joints, m linear and k angular components, the wrist is the last
         min(k, max(n - m, 0)) joints and the arm the ones before them.
         """
-        cached = _AUTO_CACHE.get(robot)
+        cached = _AUTO_CACHE.get(check_robot(robot))
         if cached is not None:
             return cached
         samples = np.vstack([robot.neutral(), robot.home(), robot.sample_configurations(_AUTO_SAMPLES, rng=20260101)])
@@ -199,6 +204,17 @@ class Partition:
         partition = cls(joints[:split], joints[split:], linear=linear, angular=angular)
         _AUTO_CACHE[robot] = partition
         return partition
+
+
+def partition_for(robot: Robot, partition: object) -> Partition:
+    """``partition``, or the robot's automatic one when it is None; InputError for anything
+    else (a string such as "auto" included) and for a robot that is not a Robot."""
+    check_robot(robot)
+    if partition is None:
+        return Partition.auto(robot)
+    if not isinstance(partition, Partition):
+        raise InputError(f"partition must be a pinrate.Partition or None (automatic), not {partition!r}")
+    return partition
 
 
 def split_blocks(jacobian: np.ndarray, m: int, n_arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -51,6 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import PHYSICAL_BOUND, check_positive
 from ..errors import InputError, choices_hint
 from ..kinematics.manipulator import Robot
 from ..kinematics.urdf import robot_from_urdf
@@ -71,14 +72,12 @@ class _Design:
 
 
 def _positive(name: str, value: float) -> float:
-    if not isinstance(value, int | float) or not math.isfinite(value) or value <= 0:
-        raise InputError(f"length {name} must be a positive number of metres, got {value!r}")
-    return float(value)
+    return check_positive(value, f"length {name} (m)")
 
 
 def _finite(name: str, value: float) -> float:
-    if not isinstance(value, int | float) or not math.isfinite(value):
-        raise InputError(f"parameter {name} must be a finite number, got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, int | float) or not abs(value) <= PHYSICAL_BOUND:
+        raise InputError(f"parameter {name} must be a finite number within ±{PHYSICAL_BOUND:g}, got {value!r}")
     return float(value)
 
 

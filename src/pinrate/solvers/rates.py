@@ -10,7 +10,7 @@ import numpy as np
 from ..checks import check_vector
 from ..errors import SingularBlockError
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition, PartitionIndex, split_blocks
+from ..kinematics.partition import Partition, PartitionIndex, partition_for, split_blocks
 from . import closed_form, reference
 from .registry import REGISTRY, check_algorithm
 
@@ -88,8 +88,8 @@ def joint_rates(
         SingularBlockError: an MCA or schur meets a singular square block (never NaN/inf).
     """
     algorithm = check_algorithm(algorithm)
+    partition = partition_for(robot, partition)
     q = robot.check_q(q)
-    partition = Partition.auto(robot) if partition is None else partition
     index = partition.resolve(robot)
     twist = check_vector(twist, index.rows.size, "twist (linear then angular components of the partition)")
     jacobian = robot.jacobian_unchecked(q)

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import SingularBlockError
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition
+from ..kinematics.partition import Partition, partition_for
 from ..solvers import reference
 
 
@@ -55,8 +55,8 @@ def convergence(robot: Robot, q: object, *, partition: Partition | None = None) 
     Raises:
         SingularBlockError: A or W is square and singular at q (G and H do not exist).
     """
+    partition = partition_for(robot, partition)
     q = robot.check_q(q)
-    partition = Partition.auto(robot) if partition is None else partition
     try:
         return convergence_from_blocks(*partition.blocks(robot, robot.kinematics(q)[0]))
     except SingularBlockError as error:

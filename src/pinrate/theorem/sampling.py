@@ -16,7 +16,7 @@ import pinocchio as pin
 from ..checks import RngLike, check_count
 from ..errors import InputError
 from ..kinematics.manipulator import Robot, RobotSpec
-from ..kinematics.partition import Partition
+from ..kinematics.partition import Partition, partition_for
 from ..kinematics.urdf import robot_from_spec
 from ..solvers import batched
 from .parallel import map_chunks
@@ -100,7 +100,7 @@ def spectral_radius_at(
     progress: bool | None = None,
 ) -> np.ndarray:
     """ρ of the smaller of G and H at each configuration (N, nq), in chunks, in parallel if asked."""
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     partition.resolve(robot)  # unknown joints fail here, not in a worker
     configurations = np.asarray(configurations, dtype=float)
     if configurations.ndim != 2 or configurations.shape[1] != robot.nq:
@@ -141,7 +141,7 @@ def sample_convergence(
     on a terminal only).
     """
     samples = check_count(samples, "samples", minimum=1)
-    partition = Partition.auto(robot) if partition is None else partition
+    partition = partition_for(robot, partition)
     configurations = robot.sample_configurations(samples, rng, joints=partition.joints)
     radii = spectral_radius_at(
         robot, configurations, partition=partition, workers=workers, scheduler=scheduler, progress=progress
