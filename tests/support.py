@@ -32,3 +32,11 @@ def finite_difference_jacobian(robot: pinrate.Robot, q: np.ndarray, step: float 
         angular = pin.log3(ahead[:3, :3] @ behind[:3, :3].T) / (2 * step)
         columns.append(np.concatenate([sensor_rotation.T @ velocity, sensor_rotation.T @ angular]))
     return np.column_stack(columns)
+
+
+def fuzz_count(base: int) -> int:
+    """How many cases a fuzz test runs: ``base`` in ``make test`` (seeded, bounded), times
+    ``PINRATE_FUZZ_SCALE`` for a longer hunt (``PINRATE_FUZZ_SCALE=100 pytest tests/fuzz``)."""
+    import os
+
+    return base * max(1, int(os.environ.get("PINRATE_FUZZ_SCALE", "1")))

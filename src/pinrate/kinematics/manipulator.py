@@ -284,7 +284,9 @@ class Robot:
         With the sensor at the tip this is one Pinocchio call (the LOCAL frame Jacobian).
         """
         if self.sensor_id == self.tip_id:
-            return pin.computeFrameJacobian(self.model, self.data, q, self.tip_id, pin.LOCAL)
+            jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.tip_id, pin.LOCAL)
+            # eigenpy hands a one-column matrix back as a vector: keep (6, nv) for one joint.
+            return jacobian.reshape(6, 1) if self.nv == 1 else jacobian
         return self.kinematics(q)[0]
 
     def kinematics(self, q: np.ndarray) -> tuple[np.ndarray, pin.SE3, pin.SE3]:
@@ -296,6 +298,8 @@ class Robot:
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
         jacobian_local = pin.getFrameJacobian(model, data, self.tip_id, pin.LOCAL)
+        if model.nv == 1:  # eigenpy's one-column matrix is a vector
+            jacobian_local = jacobian_local.reshape(6, 1)
         world_T_tip = pin.updateFramePlacement(model, data, self.tip_id)
         if self.sensor_id == self.tip_id:
             return jacobian_local, world_T_tip, world_T_tip

@@ -173,9 +173,12 @@ def _check_limit(joint: ET.Element, where: str, kind: str) -> None:
     missing = [name for name in ("effort", "velocity") if values[name] is None]
     if missing:  # urdfdom refuses a <limit> without both, whatever the joint type
         raise LoadError(f"{where}: its <limit> has no {' and no '.join(missing)} (URDF requires both)")
-    lower, upper, velocity = values["lower"], values["upper"], values["velocity"]
-    if lower is not None and upper is not None and lower[0] > upper[0]:
-        raise LoadError(f"{where}: its lower limit {lower[0]:g} is above its upper limit {upper[0]:g}")
+    # urdfdom reads an absent lower or upper as 0.
+    lower, upper = ((values[name] or [0.0])[0] for name in ("lower", "upper"))
+    if lower > upper:
+        missing_note = "" if values["lower"] and values["upper"] else " (an absent lower or upper limit is 0)"
+        raise LoadError(f"{where}: its lower limit {lower:g} is above its upper limit {upper:g}{missing_note}")
+    velocity = values["velocity"]
     if velocity is not None and velocity[0] < 0:
         raise LoadError(f"{where}: its velocity limit {velocity[0]:g} is negative")
 

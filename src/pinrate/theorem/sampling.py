@@ -64,6 +64,7 @@ def partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Par
         # call per q, collected in a list, stacked once): 15 % faster than calling the method.
         compute, model, data, tip, local = pin.computeFrameJacobian, robot.model, robot.data, robot.tip_id, pin.LOCAL
         full = np.stack([compute(model, data, q, tip, local) for q in list(configurations)])
+        full = full.reshape(len(full), 6, robot.nv)  # eigenpy gives one column as a vector
     else:
         full = np.stack([robot.jacobian_unchecked(q) for q in list(configurations)])
     if index.all_rows and index.all_columns:

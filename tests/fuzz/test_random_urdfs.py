@@ -1,0 +1,113 @@
+"""Random URDF trees: every one that loads has Jacobians that match finite differences of its
+own poses; every mutation of one loads or is refused with a PinrateError, never another
+exception, a NaN or a crash. Seeded and bounded; PINRATE_FUZZ_SCALE runs more."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from support import finite_difference_jacobian, fuzz_count
+
+import pinrate
+
+KINDS = ("revolute", "prismatic", "continuous", "fixed")
+
+
+def numbers(values: np.ndarray) -> str:
+    return " ".join(f"{value:.6g}" for value in values)
+
+
+def random_urdf(rng: np.random.Generator) -> str:
+    """A tree of 2-12 links: mostly a chain, with branches; revolute, prismatic, continuous
+    and fixed joints; odd axes (any direction, any length); zero-length links."""
+    count = int(rng.integers(2, 13))
+    links = [f'<link name="link{i}"/>' for i in range(count)]
+    joints = []
+    for child in range(1, count):
+        parent = child - 1 if rng.random() < 0.75 else int(rng.integers(0, child))
+        kind = "revolute" if child == 1 else KINDS[int(rng.choice(4, p=[0.4, 0.2, 0.2, 0.2]))]
+        xyz = np.zeros(3) if rng.random() < 0.2 else rng.normal(0.0, 0.3, 3)
+        rpy = np.zeros(3) if rng.random() < 0.4 else rng.uniform(-math.pi, math.pi, 3)
+        axis = np.eye(3)[int(rng.integers(3))] * rng.choice([-1.0, 1.0]) if rng.random() < 0.5 else rng.normal(0, 1, 3)
+        if np.linalg.norm(axis) < 1e-3:
+            axis = np.array([0.0, 0.0, 1.0])
+        inner = f'<origin xyz="{numbers(xyz)}" rpy="{numbers(rpy)}"/><axis xyz="{numbers(axis)}"/>'
+        if kind == "revolute":
+            lower = rng.uniform(-3.0, 0.0)
+            inner += f'<limit lower="{lower:.6g}" upper="{lower + rng.uniform(0.2, 3.0):.6g}" effort="1" velocity="1"/>'
+        elif kind == "prismatic":
+            inner += '<limit lower="-0.4" upper="0.6" effort="1" velocity="1"/>'
+        joints.append(
+            f'<joint name="joint{child}" type="{kind}"><parent link="link{parent}"/>'
+            f'<child link="link{child}"/>{inner}</joint>'
+        )
+    return '<robot name="random">' + "".join(links) + "".join(joints) + "</robot>"
+
+
+@pytest.mark.parametrize("seed", range(fuzz_count(150)))
+def test_random_trees_match_finite_differences(tmp_path: Path, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    path = tmp_path / f"random{seed}.urdf"
+    path.write_text(random_urdf(rng), encoding="utf-8")
+    bodies = [frame.name for frame in pinrate.load(path).model.frames if frame.name.startswith("link")]
+    robot = pinrate.load(path, sensor=str(rng.choice(bodies)))  # any sensor frame, the base's too
+    for _ in range(3):
+        q = robot.random_configuration(rng)
+        jacobian = robot.jacobian(q)
+        assert np.isfinite(jacobian).all()
+        np.testing.assert_allclose(jacobian, finite_difference_jacobian(robot, q), atol=2e-6)
+        np.testing.assert_allclose(robot.kinematics(q)[0], jacobian, atol=1e-12)
+
+
+MUTATIONS = ("drop attribute", "bad number", "duplicate element", "drop element", "joint type", "truncate", "junk")
+
+
+def mutate(text: str, rng: np.random.Generator) -> str:
+    """One random corruption of a URDF's text."""
+    mutation = MUTATIONS[int(rng.integers(len(MUTATIONS)))]
+    if mutation == "drop attribute":
+        attributes = list(re.finditer(r' [a-z_]+="[^"]*"', text))
+        hit = attributes[int(rng.integers(len(attributes)))]
+        return text[: hit.start()] + text[hit.end() :]
+    if mutation == "bad number":
+        numbers = list(re.finditer(r"-?\d+(\.\d+)?(e-?\d+)?", text))
+        hit = numbers[int(rng.integers(len(numbers)))]
+        junk = str(rng.choice(["nan", "inf", "-inf", "abc", "1e400", "", "1,5", "0x10"]))
+        return text[: hit.start()] + junk + text[hit.end() :]
+    if mutation in ("duplicate element", "drop element"):
+        elements = list(re.finditer(r"<(link|joint) .*?(/>|</joint>)", text))
+        hit = elements[int(rng.integers(len(elements)))]
+        middle = hit.group(0) * 2 if mutation == "duplicate element" else ""
+        return text[: hit.start()] + middle + text[hit.end() :]
+    if mutation == "joint type":
+        kinds = list(re.finditer(r'type="[a-z]+"', text))
+        hit = kinds[int(rng.integers(len(kinds)))]
+        kind = str(rng.choice(["floating", "planar", "hinge", "", "REVOLUTE", "fixed", "continuous"]))
+        return text[: hit.start()] + f'type="{kind}"' + text[hit.end() :]
+    if mutation == "truncate":
+        return text[: int(rng.integers(1, len(text)))]
+    position = int(rng.integers(len(text)))
+    return text[:position] + str(rng.choice(["<", ">", "&", '"', "\x00", "é", "<link/>"])) + text[position:]
+
+
+@pytest.mark.parametrize("seed", range(fuzz_count(25)))
+def test_mutated_urdfs_load_or_are_refused_cleanly(tmp_path: Path, seed: int) -> None:
+    rng = np.random.default_rng(1000 + seed)
+    outcomes = {"loaded": 0, "refused": 0}
+    for case in range(20):
+        path = tmp_path / f"mutant{case}.urdf"
+        path.write_text(mutate(random_urdf(rng), rng), encoding="utf-8", errors="surrogateescape")
+        try:
+            robot = pinrate.load(path)
+        except pinrate.PinrateError as error:
+            assert str(error), "an error without a message"
+            outcomes["refused"] += 1
+            continue
+        outcomes["loaded"] += 1
+        q = robot.random_configuration(rng)
+        assert np.isfinite(robot.jacobian(q)).all() and np.isfinite(robot.pose(q)).all()
+    assert outcomes["refused"] > 0  # the mutations do break files
