@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import finite_difference_jacobian, fuzz_count
 
 import pinrate
+from support import finite_difference_jacobian, fuzz_count
 
 KINDS = ("revolute", "prismatic", "continuous", "fixed")
 

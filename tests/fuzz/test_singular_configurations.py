@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import fuzz_count
 
 import pinrate
 from pinrate.checks import PHYSICAL_BOUND
 from pinrate.control import Controller
 from pinrate.theorem.sampling import spectral_radius_at
+from support import fuzz_count
 
 ROBOTS = ["ur5", "panda", "kinova", "z1", "scara", "planar_polar", "spherical_6dof", "barker_arm", "cartesian"]
 

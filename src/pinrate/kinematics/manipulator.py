@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..checks import RngLike, as_rng, check_count, check_vector
+from ..checks import PHYSICAL_BOUND, RngLike, as_rng, check_count, check_vector
 from ..errors import InputError, LoadError, PinrateError, choices_hint
 from .frames import default_tip_frame, resolve_frame
 
@@ -220,14 +220,32 @@ class Robot:
         :data:`UNIT_TOLERANCE`."""
         q = check_vector(q, self.nq, "q", names=self._q_names)
         if self._has_unit_pairs and not pin.isNormalized(self.model, q, UNIT_TOLERANCE):
-            self._refuse_unnormalised(q)
+            self._refuse_unnormalised(q, "q")
         return q
+
+    def check_configurations(self, configurations: object) -> np.ndarray:
+        """Configurations (N, nq) as floats, each row checked as :meth:`check_q` checks q; the
+        InputError names the first bad row."""
+        try:
+            array = np.asarray(configurations, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"configurations must be an (N, {self.nq}) array of numbers") from None
+        if array.ndim != 2 or array.shape[1] != self.nq:
+            raise InputError(f"configurations must have shape (N, {self.nq}), got {array.shape}")
+        if array.size and not float(np.abs(array).max()) <= PHYSICAL_BOUND:
+            row = int(np.flatnonzero(~(np.abs(array) <= PHYSICAL_BOUND).all(axis=1))[0])
+            check_vector(array[row], self.nq, f"configurations[{row}]", names=self._q_names)
+        if self._has_unit_pairs:
+            for row, q in enumerate(array):
+                if not pin.isNormalized(self.model, q, UNIT_TOLERANCE):
+                    self._refuse_unnormalised(q, f"configurations[{row}]")
+        return array
 
     @functools.cached_property
     def _has_unit_pairs(self) -> bool:
         return self.model.nq != self.model.nv
 
-    def _refuse_unnormalised(self, q: np.ndarray) -> None:
+    def _refuse_unnormalised(self, q: np.ndarray, what: str) -> None:
         neutral = self.neutral()
         for joint_id in range(1, self.model.njoints):
             joint_model = self.model.joints[joint_id]
@@ -238,7 +256,7 @@ class Robot:
             probe[block] = q[block]
             if not pin.isNormalized(self.model, probe, UNIT_TOLERANCE):
                 raise InputError(
-                    f"q[{block.start}:{block.stop}] of joint {self.model.names[joint_id]!r} = {q[block]} must "
+                    f"{what}[{block.start}:{block.stop}] of joint {self.model.names[joint_id]!r} = {q[block]} must "
                     "hold a unit (cos, sin) pair (or unit quaternion); write an angle a as (cos a, sin a)"
                 )
 

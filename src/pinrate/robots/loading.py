@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from ..checks import check_count
 from ..errors import InputError, LoadError, choices_hint
 from ..kinematics.manipulator import Robot
 from ..kinematics.urdf import read_urdf, robot_from_urdf
@@ -43,6 +44,8 @@ def load(
             (named joint or link), too many joints, no moving joint, unknown robot name.
         FrameError: unknown tip or sensor frame (the message lists the frames).
     """
+    if max_joints is not None:
+        check_count(max_joints, "max_joints", minimum=1)
     if isinstance(source, os.PathLike) or (isinstance(source, str) and _looks_like_path(source)):
         path = Path(source).expanduser().resolve()
         text, encoding = read_urdf(path)

@@ -14,7 +14,6 @@ import numpy as np
 import pinocchio as pin
 
 from ..checks import RngLike, check_count
-from ..errors import InputError
 from ..kinematics.manipulator import Robot, RobotSpec
 from ..kinematics.partition import Partition, partition_for
 from ..kinematics.urdf import robot_from_spec
@@ -103,9 +102,7 @@ def spectral_radius_at(
     """ρ of the smaller of G and H at each configuration (N, nq), in chunks, in parallel if asked."""
     partition = partition_for(robot, partition)
     partition.resolve(robot)  # unknown joints fail here, not in a worker
-    configurations = np.asarray(configurations, dtype=float)
-    if configurations.ndim != 2 or configurations.shape[1] != robot.nq:
-        raise InputError(f"configurations must have shape (N, {robot.nq}), got {configurations.shape}")
+    configurations = robot.check_configurations(configurations)
     if workers == 1 and scheduler is None and configurations.shape[0] <= CHUNK:
         return _spectral_radius(robot, partition, configurations)
     chunks = [configurations[start : start + CHUNK] for start in range(0, configurations.shape[0], CHUNK)]
