@@ -74,3 +74,20 @@ def test_no_import_inside_a_function_except_optional_dependencies() -> None:
                     assert (module or "").lstrip(".") in allowed, (
                         f"{path.relative_to(PACKAGE)}:{node.lineno} imports {module} inside {function.name}"
                     )
+
+
+def test_every_public_name_resolves_lazily() -> None:
+    # __init__ imports on first use: every name of __all__ must come back, and nothing heavy
+    # may load with the bare package (the CLI's Ctrl-C guard relies on it).
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, pinrate\n"
+        "assert 'pinocchio' not in sys.modules, 'import pinrate loaded pinocchio'\n"
+        "missing = [n for n in pinrate.__all__ if getattr(pinrate, n, None) is None]\n"
+        "assert not missing, missing\n"
+        "assert set(pinrate.__all__) <= set(dir(pinrate))\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert result.returncode == 0, result.stderr
