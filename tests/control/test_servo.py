@@ -211,6 +211,18 @@ def test_an_unreachable_target_stalls_whatever_max_steps(tmp_path, algorithm: st
     assert np.linalg.norm(robot.pose(trajectory.q[-1])[:2, 3]) > 1.75  # stretched towards the target
 
 
+def test_a_tiny_dt_stalls_after_the_step_cap(monkeypatch: pytest.MonkeyPatch) -> None:
+    # dt = 1e-9: one second of simulated time would be 1e9 steps; the window is capped.
+    from pinrate.control import servo_loop
+
+    monkeypatch.setattr(servo_loop, "STALL_MAX_STEPS", 300)
+    scara = pinrate.load("scara")
+    target = scara.pose(scara.home())
+    target[0, 3] += 0.3
+    trajectory = pinrate.servo(scara, scara.home(), target, dt=1e-9, max_steps=10**9)
+    assert trajectory.status[-1] == "stalled" and trajectory.steps == 300
+
+
 def test_bad_q0(ur5: pinrate.Robot) -> None:
     with pytest.raises(pinrate.InputError, match="q"):
         pinrate.servo(ur5, np.zeros(3), np.eye(4))

@@ -59,6 +59,12 @@ BROKEN = [
         ["'j1'", "3 finite"],
     ),
     ("inf in axis", robot(joint("j1", "a", "b", axis="0 inf 1"), GOOD[1]), ["'j1'", "axis"]),
+    (
+        "overflowing origin",
+        robot(joint("j1", "a", "b").replace('xyz="0 0 0.3"', 'xyz="1e308 0 0"'), GOOD[1]),
+        ["'j1'", "within"],
+    ),
+    ("overflowing axis", robot(joint("j1", "a", "b", axis="1e308 1e308 0"), GOOD[1]), ["'j1'", "axis", "within"]),
     ("zero axis", robot(joint("j1", "a", "b", axis="0 0 0"), GOOD[1]), ["'j1'", "axis is zero"]),
     ("text in limit", robot(joint("j1", "a", "b", inner=LIMIT.replace('"-1"', '"low"')), GOOD[1]), ["'j1'", "lower"]),
     ("lower above upper", robot(joint("j1", "a", "b", inner=LIMIT.replace('"-1"', '"2"')), GOOD[1]), ["'j1'", "above"]),
@@ -208,3 +214,15 @@ def test_an_expanded_file_that_keeps_the_xacro_namespace_loads(tmp_path: Path) -
     path = tmp_path / "expanded.urdf"
     path.write_text(robot(*GOOD).replace("<robot ", '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" '), "utf-8")
     assert pinrate.load(path).nv == 2
+
+
+def test_a_model_too_big_for_memory_is_a_load_error() -> None:
+    class Huge:  # what Pinocchio's model does when its data does not fit: MemoryError
+        nv = 1000
+        name = "huge"
+
+        def createData(self) -> None:
+            raise MemoryError
+
+    with pytest.raises(pinrate.LoadError, match="data for 1000 joints does not fit in memory"):
+        pinrate.Robot(Huge())

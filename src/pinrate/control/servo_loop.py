@@ -27,9 +27,9 @@ norms ``tol`` applies to):
 - **stalled**: e has not fallen below (1 - STALL_IMPROVEMENT) × its value at the last
   improvement for ``stall_time`` seconds of simulated time (default: max(1 s, 5 / gain), five
   time constants of the first-order error decay e(t) = e0 exp(-gain t) that an exact solver
-  gives). Every continuing window improves e by 1 %, and e cannot fall below ``tol`` without
-  converging, so a run ends after at most ln(e0 / tol) / ln(1 / 0.99) windows whatever
-  ``max_steps`` is.
+  gives), or for STALL_MAX_STEPS steps, whichever is fewer. Every continuing window improves
+  e by 1 %, and e cannot fall below ``tol`` without converging, so a run ends after at most
+  ln(e0 / tol) / ln(1 / 0.99) windows whatever ``max_steps`` is.
 - **joint limit**, **singular**: from the step (:class:`~.status.Status`).
 - **max steps**: ``max_steps`` ran out.
 """
@@ -56,6 +56,11 @@ STALL_IMPROVEMENT = 0.01
 
 STALL_TIME_CONSTANTS = 5.0
 """Default stall window in time constants (1 / gain) of the error's decay; at least 1 s."""
+
+STALL_MAX_STEPS = 100_000
+"""Most steps in a stall window, whatever ``stall_time / dt``: an error that needs more steps
+than this to fall 1 % is not progressing at a useful rate (and a tiny dt would otherwise
+make the window, and the run, endless in wall-clock time)."""
 
 MIN_TOL = 1e-12
 """Smallest ``tol`` (m and rad): finer than double precision resolves a pose of a 1 m arm."""
@@ -101,7 +106,7 @@ def servo(
     max_steps = check_count(max_steps, "max_steps")
     if stall_time is None:
         stall_time = max(1.0, STALL_TIME_CONSTANTS / goal.gain)
-    stall_steps = math.ceil(check_positive(stall_time, "stall_time") / controller.dt)
+    stall_steps = min(math.ceil(check_positive(stall_time, "stall_time") / controller.dt), STALL_MAX_STEPS)
     m = controller.index.m
 
     configurations, rates_log, status = [q], [], []

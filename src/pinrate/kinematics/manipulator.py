@@ -80,7 +80,12 @@ class Robot:
         reference_configurations: Mapping[str, np.ndarray] | None = None,
     ) -> None:
         self.model = model
-        self.data = model.createData()
+        try:
+            self.data = model.createData()
+        except MemoryError:
+            raise LoadError(
+                f"robot {name or model.name!r}: Pinocchio's data for {model.nv} joints does not fit in memory"
+            ) from None
         self.name = name or model.name
         self._urdf_path = urdf_path
         self._urdf_text = urdf_text

@@ -22,6 +22,7 @@ import os
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable
 
+from ..checks import PHYSICAL_BOUND
 from ..errors import LoadError
 
 MAX_JOINTS = 100
@@ -55,10 +56,11 @@ def check_structure(root: ET.Element, label: str, *, max_joints: int) -> None:
 
     Checks, naming the joint or link: every link and joint is named, once; joint types are
     the specification's; each joint's parent and child links exist; no link has two parent
-    joints; exactly one root and no cycle; revolute and prismatic joints carry a ``<limit>``; a
-    ``<limit>`` has effort and velocity, lower <= upper and velocity >= 0; origins, axes and limits are finite
-    numbers; an axis is not zero; at most ``max_joints`` moving joints and :data:`MAX_DEPTH`
-    links in a chain.
+    joints; exactly one root and no cycle; revolute and prismatic joints carry a
+    ``<limit>``; a ``<limit>`` has effort and velocity, lower <= upper and velocity >= 0;
+    origins, axes and limits are finite numbers, origins and axes within
+    :data:`~pinrate.checks.PHYSICAL_BOUND`; an axis is not zero; at most ``max_joints``
+    moving joints and :data:`MAX_DEPTH` links in a chain.
     """
     links = _unique_names(root.findall("link"), "link", label)
     joints = root.findall("joint")
@@ -132,8 +134,10 @@ def _link_reference(joint: ET.Element, role: str, links: list[str], where: str) 
     return link
 
 
-def _numbers(element: ET.Element, attribute: str, count: int, where: str) -> list[float] | None:
-    """The ``count`` finite numbers of an attribute (None when it is absent)."""
+def _numbers(
+    element: ET.Element, attribute: str, count: int, where: str, bound: float = math.inf
+) -> list[float] | None:
+    """The ``count`` finite numbers (within ±``bound``) of an attribute (None when absent)."""
     text = element.get(attribute)
     if text is None:
         return None
@@ -142,23 +146,24 @@ def _numbers(element: ET.Element, attribute: str, count: int, where: str) -> lis
         values = [float(part) for part in parts]
     except ValueError:
         values = []
-    if len(parts) != count or len(values) != count or not all(math.isfinite(value) for value in values):
+    if len(parts) != count or len(values) != count or not all(abs(value) <= bound for value in values):
         expected = "a finite number" if count == 1 else f"{count} finite numbers"
+        expected += f" within ±{bound:g}" if math.isfinite(bound) else ""
         raise LoadError(f"{where}: <{element.tag} {attribute}={text!r}> must be {expected}")
     return values
 
 
 def _check_origins(owner: ET.Element, where: str) -> None:
     for origin in owner.iter("origin"):
-        _numbers(origin, "xyz", 3, where)
-        _numbers(origin, "rpy", 3, where)
+        _numbers(origin, "xyz", 3, where, PHYSICAL_BOUND)
+        _numbers(origin, "rpy", 3, where, PHYSICAL_BOUND)
 
 
 def _check_axis(joint: ET.Element, where: str, kind: str) -> None:
     axis = joint.find("axis")
     if axis is None:
         return
-    values = _numbers(axis, "xyz", 3, where)
+    values = _numbers(axis, "xyz", 3, where, PHYSICAL_BOUND)
     if values is not None and kind != "fixed" and math.hypot(*values) < 1e-9:
         raise LoadError(f"{where}: its axis is zero ({axis.get('xyz')!r}); give a direction such as '0 0 1'")
 
