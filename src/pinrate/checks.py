@@ -80,12 +80,30 @@ def check_positive(value: object, name: str, *, allow_inf: bool = False, maximum
     return float(value)
 
 
-def check_count(value: object, name: str, *, minimum: int = 0) -> int:
-    """``value`` as an int >= ``minimum`` (bools refused); InputError naming ``name`` otherwise."""
+MAX_SAMPLES = 10_000_000
+"""Most configurations one call draws or evaluates (10 M: about 0.5 GB of q for a 6-joint arm
+and half a minute of work on one core); split bigger studies, or use ``workers``."""
+
+MAX_GRID_POINTS = 1001
+"""Most grid points per joint of a region map or grid check (1001² ≈ 1 M configurations)."""
+
+
+def check_count(value: object, name: str, *, minimum: int = 0, maximum: int | None = None) -> int:
+    """``value`` as an int in [``minimum``, ``maximum``] (bools refused); InputError naming
+    ``name`` otherwise."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         kind = "a positive integer" if minimum == 1 else f"an integer >= {minimum}"
         raise InputError(f"{name} must be {kind}, got {value!r}")
+    if maximum is not None and value > maximum:
+        raise InputError(f"{name} must be at most {maximum:,}, got {value:,}")
     return int(value)
+
+
+def check_name(value: object, what: str) -> str:
+    """``value`` if it is a string; InputError naming ``what`` otherwise."""
+    if not isinstance(value, str):
+        raise InputError(f"{what} must be a name (str), got {value!r}")
+    return value
 
 
 def as_rng(rng: RngLike) -> np.random.Generator:

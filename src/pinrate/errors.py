@@ -57,7 +57,7 @@ class SchedulerError(PinrateError):
 def choices_hint(name: str, valid: Iterable[str], *, limit: int = 40) -> str:
     """A ' Did you mean …? Known: …' suffix listing the closest or all valid names."""
     valid = list(valid)
-    close = difflib.get_close_matches(name, valid, n=5, cutoff=0.5)
+    close = difflib.get_close_matches(str(name), valid, n=5, cutoff=0.5)
     hint = f" Did you mean {', '.join(repr(c) for c in close)}?" if close else ""
     shown = valid if len(valid) <= limit else [*valid[:limit], f"... ({len(valid) - limit} more)"]
     return f"{hint} Known: {', '.join(shown)}."

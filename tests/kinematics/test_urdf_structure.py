@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pinocchio as pin
 import pytest
 
 import pinrate
@@ -216,13 +217,12 @@ def test_an_expanded_file_that_keeps_the_xacro_namespace_loads(tmp_path: Path) -
     assert pinrate.load(path).nv == 2
 
 
-def test_a_model_too_big_for_memory_is_a_load_error() -> None:
-    class Huge:  # what Pinocchio's model does when its data does not fit: MemoryError
-        nv = 1000
-        name = "huge"
+def test_a_model_too_big_for_memory_is_a_load_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    # What Pinocchio does when a model's data does not fit (1000 joints: 8 GB): MemoryError.
+    def out_of_memory(model: pin.Model) -> None:
+        raise MemoryError
 
-        def createData(self) -> None:
-            raise MemoryError
-
-    with pytest.raises(pinrate.LoadError, match="data for 1000 joints does not fit in memory"):
-        pinrate.Robot(Huge())
+    model = pinrate.load("ur5").model
+    monkeypatch.setattr(pin.Model, "createData", out_of_memory)
+    with pytest.raises(pinrate.LoadError, match="data for 6 joints does not fit in memory"):
+        pinrate.Robot(model, name="ur5")

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import MAX_GRID_POINTS, as_rng, check_count, check_positive
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
@@ -36,8 +37,8 @@ def independent_joints(
     independent when no move changes any entry of J by more than 1e-9 (relative).
     """
     partition = partition_for(robot, partition)
-    generator = np.random.default_rng(rng)
-    base = robot.sample_configurations(samples, generator, joints=partition.joints)
+    generator = as_rng(rng)
+    base = robot.sample_configurations(check_count(samples, "samples", minimum=1), generator, joints=partition.joints)
     jacobians = np.array([robot.jacobian_unchecked(q) for q in base])
     scale = 1.0 + np.abs(jacobians).max()
     independent = []
@@ -92,6 +93,7 @@ def grid_check(
         skip = set(independent_joints(robot, partition=partition))
         joints = [j for j in partition.joints if j not in skip]
     joints = tuple(joints)
+    points = check_count(points, "points", minimum=2, maximum=MAX_GRID_POINTS)
     count = points ** len(joints)
     if count > max_configurations:
         raise InputError(
@@ -130,6 +132,8 @@ def largest_parameter(
     to its partition (default: Partition.auto).
     """
 
+    tolerance = check_positive(tolerance, "tolerance")
+
     def converges(value: float) -> bool:
         robot = factory(value)
         chosen = partition(robot) if partition else None
@@ -141,6 +145,8 @@ def largest_parameter(
         return high
     while high - low > tolerance:
         middle = (low + high) / 2
+        if not low < middle < high:  # the interval is as narrow as doubles get
+            break
         if converges(middle):
             low = middle
         else:

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import MAX_GRID_POINTS, as_rng, check_count
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
@@ -36,7 +37,7 @@ class RegionMap:
 def joint_sensitivity(robot: Robot, *, partition: Partition | None = None, rng: int = 5) -> dict[str, float]:
     """How much ρ changes when each partition joint moves alone (mean spread, ρ clipped at 4)."""
     partition = partition_for(robot, partition)
-    generator = np.random.default_rng(rng)
+    generator = as_rng(rng)
     bases = robot.sample_configurations(_SENSITIVITY_BASES, generator, joints=partition.joints)
     sensitivity = {}
     for joint in partition.joints:
@@ -68,6 +69,7 @@ def region_map(
 ) -> RegionMap:
     """ρ over a ``points`` x ``points`` grid of two joints (default: the two ρ varies most with)."""
     partition = partition_for(robot, partition)
+    points = check_count(points, "points", minimum=2, maximum=MAX_GRID_POINTS)
     pair = tuple(joints) if joints is not None else default_map_joints(robot, partition=partition)
     if len(pair) != 2 or pair[0] == pair[1]:
         raise InputError(f"a region map needs two different joints, got {list(pair)}")

@@ -4,12 +4,14 @@ the parameter's limit for convergence everywhere (the paper's Fig. 10, the Hirat
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from tqdm.auto import tqdm
 
+from ..checks import check_count, check_name, check_positive
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..theorem.sampling import sample_convergence, wilson_interval
@@ -49,8 +51,13 @@ def sweep(
     value whose worst ρ on a dense grid of the joints J depends on stays below 1, found by
     bisection (:func:`pinrate.design.largest_parameter`).
     """
+    for bound in (low, high):
+        if isinstance(bound, bool) or not isinstance(bound, numbers.Real):
+            raise InputError(f"sweep range {parameter}={low}:{high} must be two numbers")
     if not (math.isfinite(low) and math.isfinite(high)) or low >= high:
-        raise InputError(f"sweep range {parameter}={low}:{high} must have low < high")
+        raise InputError(f"sweep range {parameter}={low}:{high} must have low < high, both finite")
+    steps = check_count(steps, "steps", minimum=2, maximum=10_000)
+    check_positive(tolerance, "tolerance")
     values = np.linspace(low, high, steps)
     fractions, lows, highs, worst = [], [], [], []
     for value in tqdm(
@@ -79,8 +86,10 @@ def sweep(
 def parse_sweep(text: str) -> tuple[str, float, float]:
     """'PARAM=LO:HI' -> (PARAM, LO, HI)."""
     try:
-        name, bounds = text.split("=", 1)
+        name, bounds = check_name(text, "sweep").split("=", 1)
         low, high = (float(v) for v in bounds.split(":", 1))
     except ValueError:
         raise InputError(f"--sweep takes PARAM=LO:HI (for example l3=0.01:0.2), got {text!r}") from None
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise InputError(f"--sweep bounds must be finite numbers, got {text!r}")
     return name.strip(), low, high

@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..checks import as_pose, check_positive, check_vector
-from ..errors import SingularBlockError
+from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
 from ..kinematics.spatial import pose_error, saturate
@@ -157,9 +157,16 @@ class Controller:
         return limits
 
     # ------------------------------------------------------------------ seeing
-    def observe(self, q: np.ndarray, goal: PoseGoal | None = None) -> Observation:
-        """Kinematics, blocks and ρ at a checked q (one Pinocchio pass); the pose error to
-        ``goal`` too when given."""
+    def observe(self, q: object, goal: PoseGoal | None = None) -> Observation:
+        """Kinematics, blocks and ρ at q (one Pinocchio pass); the pose error to ``goal`` too
+        when given. q is checked (:meth:`Robot.check_q`)."""
+        if goal is not None and not isinstance(goal, PoseGoal):
+            raise InputError(f"goal must be a PoseGoal (PoseGoal.of(target, gain)), not {type(goal).__name__}")
+        return self.observe_unchecked(self.robot.check_q(q), goal)
+
+    def observe_unchecked(self, q: np.ndarray, goal: PoseGoal | None = None) -> Observation:
+        """:meth:`observe` at a q that already went through :meth:`Robot.check_q` (or came out
+        of a step): the servo's hot path."""
         index = self.index
         jacobian, world_T_tip, world_T_sensor = self.robot.kinematics(q)
         error = None if goal is None else pose_error(world_T_tip, world_T_sensor, goal.target)[index.rows]
@@ -197,7 +204,7 @@ class Controller:
         (``Status.JOINT_LIMIT``). Never raises for what the robot does.
         """
         if observation is None:
-            observation = self.observe(self.robot.check_q(q))
+            observation = self.observe(q)
         if not isinstance(command, PoseGoal):
             command = check_vector(command, self.index.rows.size, "twist (linear then angular components)")
         twist, saturated = self.command_twist(observation, command)

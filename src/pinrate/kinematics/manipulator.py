@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..checks import PHYSICAL_BOUND, RngLike, as_rng, check_count, check_vector
+from ..checks import MAX_SAMPLES, PHYSICAL_BOUND, RngLike, as_rng, check_count, check_name, check_vector
 from ..errors import InputError, LoadError, PinrateError, choices_hint
 from .frames import default_tip_frame, resolve_frame
 
@@ -79,6 +79,8 @@ class Robot:
         package_dirs: Sequence[str] = (),
         reference_configurations: Mapping[str, np.ndarray] | None = None,
     ) -> None:
+        if not isinstance(model, pin.Model):
+            raise InputError(f"model must be a pinocchio.Model (or use pinrate.load), not {type(model).__name__}")
         self.model = model
         try:
             self.data = model.createData()
@@ -129,7 +131,7 @@ class Robot:
 
     def joint_id(self, joint: str) -> int:
         """Pinocchio joint index of a moving joint, or an InputError listing the joints."""
-        joint_id = self._joint_ids.get(joint)
+        joint_id = self._joint_ids.get(check_name(joint, "joint"))
         if joint_id is None or self.model.joints[joint_id].nv == 0:
             raise InputError(
                 f"robot {self.name!r} has no moving joint {joint!r}." + choices_hint(joint, self.joint_names)
@@ -180,7 +182,7 @@ class Robot:
         (nq = 2: cos, sin) by its angle in [-pi, pi]; other multi-DOF joints stay neutral.
         """
         generator = as_rng(rng)
-        samples = np.tile(self.neutral(), (check_count(count, "count"), 1))
+        samples = np.tile(self.neutral(), (check_count(count, "count", maximum=MAX_SAMPLES), 1))
         for joint in self.joint_names if joints is None else joints:
             if self.model.joints[self.joint_id(joint)].nv == 1:
                 self.set_joint_values(samples, joint, generator.uniform(*self.joint_range(joint), count))
@@ -208,6 +210,11 @@ class Robot:
         joint_model = self.model.joints[self.joint_id(joint)]
         if joint_model.nv != 1:
             raise InputError(f"joint {joint!r} has {joint_model.nv} DOF; only 1-DOF joints can be set by value")
+        if not isinstance(configurations, np.ndarray) or configurations.ndim != 2 or configurations.shape[1] != self.nq:
+            raise InputError(f"configurations must be an (N, {self.nq}) array, got {np.shape(configurations)}")
+        values = np.asarray(values, dtype=float)
+        if values.shape not in ((), (configurations.shape[0],)):
+            raise InputError(f"values must be one per configuration ({configurations.shape[0]}), got {values.shape}")
         i = joint_model.idx_q
         if joint_model.nq == 2:
             configurations[:, i], configurations[:, i + 1] = np.cos(values), np.sin(values)

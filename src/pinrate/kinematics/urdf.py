@@ -43,16 +43,16 @@ _ANY_DECLARATION = re.compile(r"^\s*<\?xml[^>]*\?>")
 def read_urdf(path: Path) -> tuple[str, str]:
     """The text of a URDF file and the encoding it was read in; LoadError naming the path
     when it is missing or a folder, a ``.xacro``, or not decodable in its declared encoding."""
-    if not path.exists():
-        raise LoadError(f"URDF file not found: {path}")
-    if not path.is_file():
-        raise LoadError(f"URDF path is not a file: {path}")
-    if path.name.endswith(".xacro"):
-        raise LoadError(_XACRO_HINT.format(label=path))
     try:
+        if not path.exists():
+            raise LoadError(f"URDF file not found: {path}")
+        if not path.is_file():
+            raise LoadError(f"URDF path is not a file: {path}")
+        if path.name.endswith(".xacro"):
+            raise LoadError(_XACRO_HINT.format(label=path))
         data = path.read_bytes()
-    except OSError as error:
-        raise LoadError(f"URDF file cannot be read: {path} ({error.strerror or error})") from None
+    except OSError as error:  # too long a name, no permission, a device that fails
+        raise LoadError(f"URDF file cannot be read: {str(path)[:200]} ({error.strerror or error})") from None
     return decode_xml(data, str(path))
 
 
@@ -76,13 +76,15 @@ def decode_xml(data: bytes, label: str) -> tuple[str, str]:
                 encoding = declared.group(1)
     try:
         text = data.decode(encoding)
-    except LookupError:
+    except LookupError:  # also a bytes-to-bytes codec such as base64
         raise LoadError(f"{label}: unknown XML encoding {encoding!r} in its declaration") from None
     except UnicodeDecodeError as error:
         raise LoadError(
             f"{label}: not valid {encoding} text at byte {error.start}"
             + ("" if encoding != "utf-8" else ' (declare its encoding: <?xml version="1.0" encoding="..."?>)')
         ) from None
+    except (UnicodeError, ValueError) as error:  # codecs such as punycode raise other errors
+        raise LoadError(f"{label}: cannot be read as {encoding!r}, the encoding it declares ({error})") from None
     return _ANY_DECLARATION.sub("", text.lstrip("\ufeff"), count=1), codecs.lookup(encoding).name
 
 

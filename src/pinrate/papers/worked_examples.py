@@ -33,7 +33,7 @@ import numpy as np
 from .. import robots
 from ..analysis import design
 from ..control.servo_loop import servo
-from ..errors import SingularBlockError
+from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..solvers.rates import joint_rates
@@ -638,6 +638,8 @@ def results() -> list[Result]:
 
 def markdown(rows: list[Result]) -> str:
     """docs/paper-results.md: the intro and one table row per result."""
+    if not isinstance(rows, list | tuple) or not all(isinstance(row, Result) for row in rows):
+        raise InputError("markdown takes the list of Result rows that results() returns")
     lines = [
         "# The papers' results, reproduced by pinrate",
         "",

@@ -34,6 +34,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..checks import check_name
 from ..errors import LoadError
 
 _HALF_PI = math.pi / 2
@@ -150,6 +151,7 @@ def example_robot_data_share() -> Path | None:
 
 def example_robot_path(relative: str) -> Path:
     """Absolute path of a file inside example-robot-data's robots folder."""
+    check_name(relative, "example-robot-data file")
     share = example_robot_data_share()
     if share is None:
         raise LoadError(

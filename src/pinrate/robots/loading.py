@@ -47,7 +47,10 @@ def load(
     if max_joints is not None:
         check_count(max_joints, "max_joints", minimum=1)
     if isinstance(source, os.PathLike) or (isinstance(source, str) and _looks_like_path(source)):
-        path = Path(source).expanduser().resolve()
+        try:
+            path = Path(source).expanduser().resolve()
+        except (OSError, RuntimeError, ValueError) as error:  # a NUL byte, ~unknownuser, a loop
+            raise LoadError(f"URDF path {str(source)[:200]!r} cannot be resolved: {error}") from None
         text, encoding = read_urdf(path)
         return robot_from_urdf(
             text,

@@ -51,7 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..checks import PHYSICAL_BOUND, check_positive
+from ..checks import PHYSICAL_BOUND, check_name, check_output_folder, check_positive
 from ..errors import InputError, choices_hint
 from ..kinematics.manipulator import Robot
 from ..kinematics.urdf import robot_from_urdf
@@ -265,7 +265,7 @@ ROBOT_NAMES: tuple[str, ...] = tuple(_GENERATORS)
 
 
 def _generator(name: str) -> Callable[..., _Design]:
-    generator = _GENERATORS.get(name)
+    generator = _GENERATORS.get(check_name(name, "robot name"))
     if generator is None:
         raise InputError(f"unknown paper robot {name!r}." + choices_hint(name, ROBOT_NAMES))
     return generator
@@ -350,8 +350,7 @@ def barker_arm(*, tip: str | None = None, sensor: str | None = None, **lengths: 
 
 def write_urdfs(folder: str | os.PathLike[str]) -> list[Path]:
     """Write every papers' robot, with the papers' values, as ``folder/NAME.urdf``."""
-    target = Path(folder)
-    target.mkdir(parents=True, exist_ok=True)
+    target = check_output_folder(folder, "URDF folder")
     written = []
     for name in ROBOT_NAMES:
         path = target / f"{name}.urdf"

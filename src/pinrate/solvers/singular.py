@@ -16,6 +16,8 @@ from typing import TypeVar
 
 import numpy as np
 
+from ..errors import InputError
+
 SINGULAR_RATIO = 1e-10
 """A square block is singular when |det M| <= SINGULAR_RATIO * prod of its column norms."""
 
@@ -36,6 +38,8 @@ def invertible(det: Number, column_norms_squared_product: Number) -> bool | np.n
 def hadamard_ratio(M: np.ndarray) -> float:
     """|det M| / prod_j ||M[:, j]|| of a square block, in [0, 1] (1.0 for an empty block):
     how far from singular it is, on the scale of :data:`SINGULAR_RATIO`."""
+    if M.ndim != 2 or M.shape[0] != M.shape[1]:
+        raise InputError(f"the Hadamard ratio is defined for a square block, got shape {M.shape}")
     if M.shape[0] == 0:
         return 1.0
     scale = float(np.prod(np.linalg.norm(M, axis=0)))

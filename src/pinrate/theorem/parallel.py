@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import signal
+import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any, TypeVar
@@ -105,10 +106,37 @@ def _dask_client(scheduler: object) -> tuple[Any, bool]:
     address = getattr(scheduler, "scheduler_address", scheduler)
     if not isinstance(address, str):
         raise InputError(f"scheduler must be an address, a distributed.Client or a cluster, not {scheduler!r}")
-    try:
-        return Client(address, timeout=SCHEDULER_TIMEOUT), True
-    except ValueError as error:
-        raise InputError(f"scheduler address {address!r} is not valid: {error}") from None
-    except OSError as error:
-        reason = f"no Dask scheduler reachable at {address!r} within {SCHEDULER_TIMEOUT:g} s: {error}"
-        raise SchedulerError(reason) from None
+    return _connect(Client, address), True
+
+
+def _connect(client_class: Any, address: str) -> Any:
+    """A Client of the scheduler at ``address``, or a PinrateError within about
+    SCHEDULER_TIMEOUT seconds. distributed's own timeout covers the TCP connection, not a
+    peer that accepts and never speaks (or speaks HTTP: its reply parses as a 3 EiB frame),
+    so the attempt runs in a daemon thread that is abandoned if it does not return."""
+    outcome: dict[str, Any] = {}
+
+    def attempt() -> None:
+        try:
+            outcome["client"] = client_class(address, timeout=SCHEDULER_TIMEOUT)
+        except BaseException as error:  # handed to the caller's thread below
+            outcome["error"] = error
+
+    thread = threading.Thread(target=attempt, name="pinrate-dask-connect", daemon=True)
+    thread.start()
+    thread.join(SCHEDULER_TIMEOUT + 5.0)
+    error = outcome.get("error")
+    if thread.is_alive():
+        raise SchedulerError(f"{address!r} did not answer as a Dask scheduler within {SCHEDULER_TIMEOUT + 5:g} s")
+    if isinstance(error, ValueError):
+        raise InputError(f"scheduler address {address!r} is not valid: {error}")
+    if isinstance(error, TypeError):  # tls:// without security settings, and the like
+        raise InputError(
+            f"scheduler {address!r}: {error}; for a secured cluster pass a distributed.Client instead of an address"
+        )
+    if isinstance(error, OSError | MemoryError):
+        reason = str(error) if isinstance(error, OSError) else "its reply is not Dask's protocol"
+        raise SchedulerError(f"no Dask scheduler reachable at {address!r} within {SCHEDULER_TIMEOUT:g} s: {reason}")
+    if error is not None:
+        raise error
+    return outcome["client"]

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import SingularBlockError
+from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
 from ..solvers import reference
@@ -42,7 +42,17 @@ class Convergence:
 
 
 def convergence_from_blocks(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> Convergence:
-    """The Theorem's test from the blocks of eq. 19 (numpy reference: LAPACK eigenvalues)."""
+    """The Theorem's test from the blocks of eq. 19 (numpy reference: LAPACK eigenvalues).
+
+    Shapes: A (m, a), B (m, w), U (k, a), W (k, w); InputError otherwise.
+    """
+    A, B, U, W = (np.asarray(block, dtype=float) for block in (A, B, U, W))
+    if any(block.ndim != 2 for block in (A, B, U, W)) or not (
+        A.shape[0] == B.shape[0] and U.shape[0] == W.shape[0] and A.shape[1] == U.shape[1] and B.shape[1] == W.shape[1]
+    ):
+        raise InputError(
+            f"blocks must be A (m, a), B (m, w), U (k, a), W (k, w); got {A.shape}, {B.shape}, {U.shape}, {W.shape}"
+        )
     G, H = reference.convergence_matrices(A, B, U, W)
     eigenvalues = reference.smaller_eigenvalues(G, H)
     radius = float(np.max(np.abs(eigenvalues))) if eigenvalues.size else 0.0

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..checks import RngLike, check_count
+from ..checks import MAX_SAMPLES, RngLike, check_count
+from ..errors import InputError
 from ..kinematics.manipulator import Robot, RobotSpec
 from ..kinematics.partition import Partition, partition_for
 from ..kinematics.urdf import robot_from_spec
@@ -44,6 +45,8 @@ class ConvergenceSample:
 
 def wilson_interval(successes: int, trials: int, z: float = _Z95) -> tuple[float, float]:
     """Wilson score interval of a binomial proportion (good near 0 and 1, unlike Wald's)."""
+    if not 0 <= successes <= trials:
+        raise InputError(f"successes must lie in [0, trials]: got {successes} of {trials}")
     if trials == 0:
         return (0.0, 1.0)
     p = successes / trials
@@ -138,7 +141,7 @@ def sample_convergence(
     the same either way: configurations are drawn here first). ``progress``: a bar (None:
     on a terminal only).
     """
-    samples = check_count(samples, "samples", minimum=1)
+    samples = check_count(samples, "samples", minimum=1, maximum=MAX_SAMPLES)
     partition = partition_for(robot, partition)
     configurations = robot.sample_configurations(samples, rng, joints=partition.joints)
     radii = spectral_radius_at(

@@ -33,10 +33,11 @@ import numpy as np
 import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
-from ..checks import as_pose, check_output_file
+from ..checks import as_pose, check_output_file, check_positive, check_vector
 from ..control.trajectory import Trajectory
-from ..kinematics.manipulator import Robot
-from .server import MeshcatServer
+from ..errors import InputError
+from ..kinematics.manipulator import Robot, check_robot
+from .server import MeshcatServer, check_reachable
 
 ROOT = "pinrate"
 CONVERGING_COLOUR = 0x2CA02C  # ρ < 1
@@ -58,7 +59,10 @@ def triad(length: float = 0.1, width: float = 3.0, opacity: float = 1.0) -> tupl
 
 def path_colours(spectral_radius: np.ndarray) -> np.ndarray:
     """RGB (3, N) per path point: green where ρ < 1, red where ρ >= 1 (or undefined)."""
-    converging = np.asarray(spectral_radius) < 1.0
+    try:
+        converging = np.asarray(spectral_radius, dtype=float).reshape(-1) < 1.0
+    except (TypeError, ValueError):
+        raise InputError("spectral_radius must be a sequence of numbers") from None
     green = np.array([0x2C, 0xA0, 0x2C]) / 255.0
     red = np.array([0xD6, 0x27, 0x28]) / 255.0
     return np.where(converging[None, :], green[:, None], red[:, None]).astype(np.float32)
@@ -77,8 +81,10 @@ class Viewer:
     def __init__(
         self, robot: Robot, *, host: str = "127.0.0.1", zmq_url: str | None = None, open_browser: bool = False
     ) -> None:
-        self.robot = robot
+        self.robot = check_robot(robot)
         self.data = robot.model.createData()  # the viewer's own: a control loop keeps robot.data
+        if zmq_url is not None:
+            check_reachable(zmq_url)
         self.server = MeshcatServer(host) if zmq_url is None else None
         with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints the URL itself; we report it
             self.meshcat = meshcat.Visualizer(zmq_url=self.server.zmq_url if self.server else zmq_url)
@@ -103,7 +109,7 @@ class Viewer:
         meshcat 0.3.2's camera helpers in Pinocchio fail (no ``set_cam_pos``), so this sets
         the ``position`` of ``/Cameras/default/rotated/<object>``, whose frame is Y up.
         """
-        x, y, z = (float(v) for v in position)
+        x, y, z = check_vector(position, 3, "camera position")
         self.meshcat["/Cameras/default"].set_transform(np.eye(4))
         self.meshcat["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
 
@@ -149,8 +155,10 @@ class Viewer:
         """A polyline through ``points`` (N, 3), each segment coloured by ρ at its start."""
         points = np.asarray(points, dtype=np.float32)
         radius = np.asarray(spectral_radius, dtype=float)
-        if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] != radius.shape[0]:
-            raise ValueError("points must be (N, 3) with one spectral radius per point")
+        if points.ndim != 2 or points.shape[1] != 3 or radius.shape != (points.shape[0],):
+            raise InputError(
+                f"points must be (N, 3) with one spectral radius per point, got {points.shape} and {radius.shape}"
+            )
         name = f"paths/{self._paths}"
         self._paths += 1
         if points.shape[0] >= 2:
@@ -175,6 +183,10 @@ class Viewer:
         fps: float = 30.0,
     ) -> None:
         """Animate a servo run: the path coloured by ρ, then the robot along it at ``speed``× real time."""
+        if not isinstance(trajectory, Trajectory):
+            raise InputError(f"play takes a Trajectory (what servo() returns), not {type(trajectory).__name__}")
+        speed = check_positive(speed, "speed")
+        fps = check_positive(fps, "fps")
         if target is not None:
             self.set_target(target)
         tips = np.array([self.tip_position(q) for q in trajectory.q])
@@ -183,7 +195,7 @@ class Viewer:
         indices = list(range(0, trajectory.q.shape[0], stride))
         if indices[-1] != trajectory.q.shape[0] - 1:
             indices.append(trajectory.q.shape[0] - 1)
-        period = stride * trajectory.dt / max(speed, 1e-9)
+        period = stride * trajectory.dt / speed
         for index in indices:
             started = time.monotonic()
             self.show(trajectory.q[index])

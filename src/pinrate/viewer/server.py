@@ -27,6 +27,9 @@ def check_host(host: object) -> str:
     except (socket.gaierror, UnicodeError) as error:
         reason = getattr(error, "strerror", None) or str(error)
         raise ViewerError(f"host {host!r} is not a known address ({reason})") from None
+    candidates = [candidate for candidate in candidates if candidate[0] == socket.AF_INET]
+    if not candidates:
+        raise ViewerError(f"host {host!r}: meshcat's server listens on IPv4 addresses only (try 127.0.0.1)")
     failure = ""
     for family, kind, protocol, _, address in candidates:
         try:
@@ -35,13 +38,27 @@ def check_host(host: object) -> str:
         except OSError as error:
             failure = error.strerror or str(error)
             continue
-        if not ipaddress.ip_address(address[0].split("%")[0]).is_loopback:
+        if not ipaddress.ip_address(address[0]).is_loopback:
             warnings.warn(
                 f"the viewer listens on {host} ({address[0]}): anyone who can reach this machine can open it",
                 stacklevel=3,
             )
         return host
     raise ViewerError(f"host {host!r} is not an address of this machine: cannot listen there ({failure})")
+
+
+def check_reachable(zmq_url: object, timeout: float = 2.0) -> str:
+    """``zmq_url`` (``tcp://host:port``) if something accepts connections there; ViewerError
+    otherwise (meshcat itself would wait for an answer for ever)."""
+    if not isinstance(zmq_url, str) or not zmq_url.startswith("tcp://") or ":" not in zmq_url[6:]:
+        raise ViewerError(f"zmq_url must look like 'tcp://127.0.0.1:6000', got {zmq_url!r}")
+    host, _, port = zmq_url[6:].rpartition(":")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            return zmq_url
+    except (OSError, ValueError) as error:
+        reason = getattr(error, "strerror", None) or str(error)
+        raise ViewerError(f"no Meshcat server at {zmq_url} ({reason})") from None
 
 
 class MeshcatServer:
@@ -76,7 +93,8 @@ class MeshcatServer:
                 return line[len(prefix) :]
             if not line and self.process.poll() is not None:
                 error = self.process.stderr.read().decode("utf-8", "replace") if self.process.stderr else ""
-                raise ViewerError(f"the Meshcat server exited with code {self.process.returncode}: {error[-500:]}")
+                last = [line.strip() for line in error.splitlines() if line.strip()][-1:] or ["no message"]
+                raise ViewerError(f"the Meshcat server exited with code {self.process.returncode}: {last[0]}")
         self.close()
         raise ViewerError(f"the Meshcat server did not report {prefix[:-1]} within {SERVER_START_TIMEOUT:g} s")
 
