@@ -124,10 +124,10 @@ def _connect(client_class: Any, address: str) -> Any:
 
     thread = threading.Thread(target=attempt, name="pinrate-dask-connect", daemon=True)
     thread.start()
-    thread.join(SCHEDULER_TIMEOUT + 5.0)
+    thread.join(2 * SCHEDULER_TIMEOUT)
     error = outcome.get("error")
     if thread.is_alive():
-        raise SchedulerError(f"{address!r} did not answer as a Dask scheduler within {SCHEDULER_TIMEOUT + 5:g} s")
+        raise SchedulerError(f"{address!r} did not answer as a Dask scheduler within {2 * SCHEDULER_TIMEOUT:g} s")
     if isinstance(error, ValueError):
         raise InputError(f"scheduler address {address!r} is not valid: {error}")
     if isinstance(error, TypeError):  # tls:// without security settings, and the like
