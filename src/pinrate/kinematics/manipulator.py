@@ -96,6 +96,9 @@ class Robot:
         self.joint_names: tuple[str, ...] = tuple(
             model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0
         )
+        # Plain attributes, not properties: read on every call of the hot path.
+        self._single_column = model.nv == 1
+        self._has_unit_pairs = model.nq != model.nv
         if not self.joint_names:
             raise LoadError(f"robot {self.name!r} has no moving joint: every joint is fixed, nothing to control")
 
@@ -253,10 +256,6 @@ class Robot:
                     self._refuse_unnormalised(q, f"configurations[{row}]")
         return array
 
-    @functools.cached_property
-    def _has_unit_pairs(self) -> bool:
-        return self.model.nq != self.model.nv
-
     def _refuse_unnormalised(self, q: np.ndarray, what: str) -> None:
         neutral = self.neutral()
         for joint_id in range(1, self.model.njoints):
@@ -316,7 +315,7 @@ class Robot:
         if self.sensor_id == self.tip_id:
             jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.tip_id, pin.LOCAL)
             # eigenpy hands a one-column matrix back as a vector: keep (6, nv) for one joint.
-            return jacobian.reshape(6, 1) if self.nv == 1 else jacobian
+            return jacobian.reshape(6, 1) if self._single_column else jacobian
         return self.kinematics(q)[0]
 
     def kinematics(self, q: np.ndarray) -> tuple[np.ndarray, pin.SE3, pin.SE3]:
@@ -328,7 +327,7 @@ class Robot:
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
         jacobian_local = pin.getFrameJacobian(model, data, self.tip_id, pin.LOCAL)
-        if model.nv == 1:  # eigenpy's one-column matrix is a vector
+        if self._single_column:  # eigenpy's one-column matrix is a vector
             jacobian_local = jacobian_local.reshape(6, 1)
         world_T_tip = pin.updateFramePlacement(model, data, self.tip_id)
         if self.sensor_id == self.tip_id:
