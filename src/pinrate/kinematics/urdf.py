@@ -94,11 +94,39 @@ _XACRO_HINT = (
 )
 
 
+_PREFIXED_NAME = re.compile(r"[<\s/]([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*")
+_ROBOT_START = re.compile(r"<robot(?=[\s>/])")
+
+
+def parse_like_urdfdom(text: str) -> ET.Element:
+    """The XML tree as urdfdom (through tinyxml2, which knows no namespaces) sees it.
+
+    Prefixes that the file uses without declaring them (``drake:acceleration``, a common
+    foreign extension) are declared for the parse, so they stay foreign elements and
+    attributes instead of making the file malformed; a default namespace on ``<robot>`` is
+    dropped, so ``<link>`` is a link whatever ``xmlns`` says. Raises ``ET.ParseError``.
+    """
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as error:
+        if "unbound prefix" not in str(error):
+            raise
+        prefixes = sorted(set(_PREFIXED_NAME.findall(text)) - {"xml", "xmlns"})
+        declarations = "".join(f' xmlns:{prefix}="urn:pinrate:undeclared:{prefix}"' for prefix in prefixes)
+        root = ET.fromstring(_ROBOT_START.sub(lambda match: match.group(0) + declarations, text, count=1))
+    if root.tag.startswith("{"):
+        default = root.tag[: root.tag.index("}") + 1]
+        for element in root.iter():
+            if element.tag.startswith(default):
+                element.tag = element.tag[len(default) :]
+    return root
+
+
 def _check_urdf_text(text: str, label: str, max_joints: int) -> ET.Element:
     """The URDF's root element; LoadError naming ``label`` for malformed XML, a non-URDF, a
     xacro, or a structure Pinocchio cannot build soundly (:mod:`.urdf_structure`)."""
     try:
-        root = ET.fromstring(text)
+        root = parse_like_urdfdom(text)
     except ET.ParseError as error:
         if "<xacro:" in text:  # xacro without its namespace declared
             raise LoadError(_XACRO_HINT.format(label=label)) from None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 from ..checks import check_count
@@ -24,6 +25,7 @@ def load(
     tip: str | None = None,
     sensor: str | None = None,
     max_joints: int | None = None,
+    package_dirs: Sequence[str | os.PathLike[str]] = (),
 ) -> Robot:
     """Load a robot from a URDF path, a papers'-robot name or an example-robot-data name.
 
@@ -38,6 +40,8 @@ def load(
             :data:`pinrate.kinematics.urdf_structure.MAX_JOINTS`, 100, or the
             ``PINRATE_MAX_JOINTS`` environment variable): Pinocchio's data grows with the
             cube of the joint count.
+        package_dirs: more folders for ``package://`` mesh URIs, searched before the
+            defaults (the URDF's ancestors and example-robot-data).
 
     Raises:
         LoadError: missing file, malformed XML, not a URDF, a ``.xacro``, a structure fault
@@ -59,7 +63,7 @@ def load(
             sensor=sensor,
             # urdfdom reads files as UTF-8: the visuals of a file in another encoding come from the text
             urdf_path=path if encoding in ("utf-8", "ascii") else None,
-            package_dirs=_package_dirs_for(path),
+            package_dirs=[*_checked_dirs(package_dirs), *_package_dirs_for(path)],
             max_joints=max_joints,
         )
     if not isinstance(source, str):
@@ -74,6 +78,19 @@ def load(
 
 def _looks_like_path(source: str) -> bool:
     return source.endswith((".urdf", ".xml", ".xacro")) or os.sep in source or "/" in source
+
+
+def _checked_dirs(package_dirs: object) -> list[str]:
+    if isinstance(package_dirs, str | os.PathLike):
+        package_dirs = [package_dirs]
+    try:
+        folders = [Path(folder).expanduser() for folder in package_dirs]  # type: ignore[union-attr]
+    except TypeError:
+        raise InputError(f"package_dirs must be a list of folders, got {package_dirs!r}") from None
+    for folder in folders:
+        if not folder.is_dir():
+            raise InputError(f"package_dirs: {str(folder)!r} is not a folder")
+    return [str(folder) for folder in folders]
 
 
 def _package_dirs_for(path: Path) -> list[str]:
