@@ -51,4 +51,4 @@ def test_demo_reports_an_automatic_tip(capsys: pytest.CaptureFixture[str]) -> No
 
     main(["demo", str(DATA / "mixed_joints.urdf"), "--no-viewer", "--max-steps", "5"])
     out = capsys.readouterr().out
-    assert "tip        tool (chosen: the deepest frame at the end of the longest chain" in out
+    assert "tip        tool (chosen: named like a tool centre on 'pitch'" in out and "left out: finger_joint" in out

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+
 import pinocchio as pin
 
 from ..errors import FrameError, InputError, choices_hint
@@ -34,21 +38,102 @@ def resolve_frame(model: pin.Model, name: str, *, role: str, robot: str = "") ->
     )
 
 
-def default_tip_frame(model: pin.Model) -> int:
-    """The deepest frame at the end of the longest chain of moving joints (ties: model order).
+TOOL_NAMES = (
+    ("tcp", "tool_center", "toolcenter", "grasp"),
+    ("tool0", "tool"),
+    ("end_effector", "endeffector", "eef", "ee"),
+    ("gripper",),
+    ("hand", "flange"),
+)
+"""Name fragments of tool-centre frames, best first (matched on ``_``-separated words, and
+as substrings for the longer ones)."""
 
-    The longest chain ends at the moving joint with the most moving joints in its support;
-    among the frames attached to it, the one with the most ancestor frames wins, links
-    preferred over joint frames.
-    """
+HAND_JOINT_WORDS = ("finger", "gripper", "jaw", "thumb", "knuckle", "claw", "palm", "pinch", "hand")
+"""Words in a moving joint's name that make it a joint of a gripper or hand, not of the arm."""
 
-    def moving_depth(joint_id: int) -> int:
-        return sum(1 for j in model.supports[joint_id] if j > 0 and model.joints[j].nv > 0)
 
+@dataclass(frozen=True)
+class TipChoice:
+    """The default tip of a model and why: its frame, the arm's last joint, the joints left out."""
+
+    frame_id: int
+    reason: str
+    hand_joints: tuple[str, ...]
+
+
+def hand_joints(model: pin.Model, mimic: Mapping[str, str] | None = None) -> tuple[str, ...]:
+    """Moving joints of grippers and hands, which are not part of the arm (contract v2):
+    mimic joints and the joints they mimic, joints whose range is zero, joints named like a
+    hand part (:data:`HAND_JOINT_WORDS`), and prismatic joints with no arm joint below them.
+    Empty when that would leave no joint at all (a hand on its own is its own arm)."""
+    mimic = dict(mimic or {})
     moving = [j for j in range(1, model.njoints) if model.joints[j].nv > 0]
-    if not moving:
-        return len(model.frames) - 1
-    end_joint = max(moving, key=lambda j: (moving_depth(j), -j))
+    names = {j: model.names[j] for j in moving}
+    hand = set()
+    for joint_id, name in names.items():
+        joint_model = model.joints[joint_id]
+        words = set(re.split(r"[^a-z0-9]+", name.lower()))
+        lower = model.lowerPositionLimit[joint_model.idx_q : joint_model.idx_q + joint_model.nq]
+        upper = model.upperPositionLimit[joint_model.idx_q : joint_model.idx_q + joint_model.nq]
+        if (
+            name in mimic
+            or name in mimic.values()
+            or (joint_model.nq == 1 and float(upper[0] - lower[0]) <= 0.0)
+            or any(_names_part(word, name, words) for word in HAND_JOINT_WORDS)
+        ):
+            hand.add(joint_id)
+    # Prismatic joints at the end of a chain (fingers), repeated: one may sit below another.
+    changed = True
+    while changed:
+        changed = False
+        for joint_id in moving:
+            if joint_id in hand or not model.joints[joint_id].shortname().startswith("JointModelP"):
+                continue
+            below = [j for j in model.subtrees[joint_id] if j != joint_id and j in names and j not in hand]
+            if not below:
+                hand.add(joint_id)
+                changed = True
+    if len(hand) == len(moving):
+        return ()
+    return tuple(names[j] for j in moving if j in hand)
+
+
+def _names_part(word: str, name: str, words: set[str]) -> bool:
+    """Whether ``name`` (split into ``words``) names a hand part: a long word anywhere
+    (``jointGripper``), a short one only as a whole word or followed by digits (``hand``,
+    ``jaw1``; not ``handle``)."""
+    if len(word) > 4:
+        return word in name.lower()
+    return any(part == word or (part.startswith(word) and part[len(word) :].isdigit()) for part in words)
+
+
+def _tool_rank(name: str) -> int:
+    """0 for the best tool-centre name, len(TOOL_NAMES) for a name like no tool at all."""
+    words = set(re.split(r"[^a-z0-9]+", name.lower()))
+    for rank, fragments in enumerate(TOOL_NAMES):
+        for fragment in fragments:
+            if fragment in words or (len(fragment) > 3 and fragment in name.lower()):
+                return rank
+    return len(TOOL_NAMES)
+
+
+def default_tip_frame(model: pin.Model, mimic: Mapping[str, str] | None = None) -> TipChoice:
+    """The tool frame of the main arm (contract v2, "Robot defaults for any URDF").
+
+    The arm is the moving joints less the hand joints (:func:`hand_joints`); the main arm ends
+    at the arm joint with the most arm joints in its support (ties: model order). Among the
+    frames fixed to that joint, a name like a tool centre wins (:data:`TOOL_NAMES`, best
+    first), then the deepest frame, links before joint frames.
+    """
+    left_out = set(hand_joints(model, mimic))
+    arm = [j for j in range(1, model.njoints) if model.joints[j].nv > 0 and model.names[j] not in left_out]
+    if not arm:
+        return TipChoice(len(model.frames) - 1, "the last frame (no moving joint)", ())
+
+    def arm_depth(joint_id: int) -> int:
+        return sum(1 for j in model.supports[joint_id] if j in arm)
+
+    end_joint = max(arm, key=lambda j: (arm_depth(j), -j))
 
     def frame_depth(frame_id: int) -> int:
         depth = 0
@@ -58,4 +143,19 @@ def default_tip_frame(model: pin.Model) -> int:
         return depth
 
     attached = [f for f, frame in enumerate(model.frames) if frame.parentJoint == end_joint]
-    return max(attached, key=lambda f: (frame_depth(f), model.frames[f].type == pin.FrameType.BODY, -f))
+    best = min(
+        attached,
+        key=lambda f: (
+            _tool_rank(model.frames[f].name),
+            -frame_depth(f),
+            model.frames[f].type != pin.FrameType.BODY,
+            f,
+        ),
+    )
+    named = _tool_rank(model.frames[best].name) < len(TOOL_NAMES)
+    how = "named like a tool centre" if named else "the deepest frame"
+    reason = f"chosen: {how} on {model.names[end_joint]!r}, the last joint of the longest arm chain"
+    if left_out:
+        shown = ", ".join(sorted(left_out)[:6]) + (" ..." if len(left_out) > 6 else "")
+        reason += f" (gripper/hand joints left out: {shown})"
+    return TipChoice(best, reason, tuple(sorted(left_out)))

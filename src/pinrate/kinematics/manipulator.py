@@ -78,6 +78,7 @@ class Robot:
         urdf_text: str | None = None,
         package_dirs: Sequence[str] = (),
         reference_configurations: Mapping[str, np.ndarray] | None = None,
+        mimic: Mapping[str, str] | None = None,
     ) -> None:
         if not isinstance(model, pin.Model):
             raise InputError(f"model must be a pinocchio.Model (or use pinrate.load), not {type(model).__name__}")
@@ -102,9 +103,11 @@ class Robot:
         if not self.joint_names:
             raise LoadError(f"robot {self.name!r} has no moving joint: every joint is fixed, nothing to control")
 
+        choice = default_tip_frame(model, mimic)
+        self.hand_joints: tuple[str, ...] = choice.hand_joints
         if tip is None:
-            self.tip_id = default_tip_frame(model)
-            self.tip_choice = "chosen: the deepest frame at the end of the longest chain of moving joints"
+            self.tip_id = choice.frame_id
+            self.tip_choice = choice.reason
             logger.info("%s: no tip given, %s: %r", self.name, self.tip_choice, model.frames[self.tip_id].name)
         else:
             self.tip_id = resolve_frame(model, tip, role="tip", robot=self.name)

@@ -180,7 +180,8 @@ class Partition:
     def auto(cls, robot: Robot) -> Partition:
         """The default partition of ``robot`` (cached on the robot).
 
-        Only joints of the tip's chain whose Jacobian column is non-zero somewhere take part;
+        Only joints of the tip's chain whose Jacobian column is non-zero somewhere take part,
+        less the gripper and hand joints (mimic, mimicked, zero-range; :attr:`Robot.hand_joints`);
         twist components whose rows are zero at every sampled configuration are dropped.
         With n joints, m linear and k angular components, the wrist is the last
         min(k, max(n - m, 0)) joints and the arm the ones before them.
@@ -194,7 +195,11 @@ class Partition:
             magnitude = np.maximum(magnitude, np.abs(robot.jacobian(q)))
         tol = _ZERO_TOL * (1.0 + magnitude.max())
         moving = magnitude > tol
-        joints = [j for j in robot.tip_chain() if any(moving[:, c].any() for c in robot.velocity_indices(j))]
+        joints = [
+            j
+            for j in robot.tip_chain()
+            if j not in robot.hand_joints and any(moving[:, c].any() for c in robot.velocity_indices(j))
+        ]
         columns = [c for j in joints for c in robot.velocity_indices(j)]
         active_rows = moving[:, columns].any(axis=1) if columns else np.zeros(6, dtype=bool)
         linear = "".join(a for i, a in enumerate(_AXES) if active_rows[i])

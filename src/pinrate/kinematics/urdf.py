@@ -225,7 +225,19 @@ def robot_from_urdf(
         urdf_text=text,
         package_dirs=package_dirs,
         reference_configurations=references,
+        mimic=mimic_joints(root),
     )
+
+
+def mimic_joints(root: ET.Element) -> dict[str, str]:
+    """Joint -> the joint it mimics, from the URDF's ``<mimic joint=...>`` elements (Pinocchio
+    models them as independent joints; pinrate leaves both out of the arm)."""
+    pairs = {}
+    for joint in root.findall("joint"):
+        mimic = joint.find("mimic")
+        if mimic is not None and joint.get("name") and mimic.get("joint"):
+            pairs[joint.get("name", "")] = mimic.get("joint", "")
+    return pairs
 
 
 def into_limits(model: pin.Model, q: np.ndarray) -> np.ndarray:

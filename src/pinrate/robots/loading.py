@@ -34,7 +34,8 @@ def load(
             (the papers' robots such as ``"scara"``, and ``"ur5"``, ``"panda"``, ...).
         tip: the frame whose origin is the TCP (a link, joint or fixed frame; a name that is
             both a link and a joint means the link). Default: the name table's tip; for any
-            other URDF, the deepest frame at the end of the longest chain of moving joints.
+            other URDF, the tool frame of the main arm, gripper and hand joints left out
+            (:func:`pinrate.kinematics.frames.default_tip_frame`; ``robot.tip_choice`` says why).
         sensor: the frame whose axes twists are expressed in. Default: the tip.
         max_joints: refuse URDFs with more moving joints (default
             :data:`pinrate.kinematics.urdf_structure.MAX_JOINTS`, 100, or the
