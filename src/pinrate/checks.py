@@ -145,7 +145,7 @@ def as_pose(target: object) -> pin.SE3:
 def check_output_folder(path: str | os.PathLike[str], what: str) -> Path:
     """A folder to write into, created if missing; InputError naming ``what`` when the path
     is a file, cannot be created or is not writable."""
-    folder = Path(path).expanduser()
+    folder = _as_path(path, what)
     if folder.exists() and not folder.is_dir():
         raise InputError(f"{what} {str(folder)!r} exists and is not a folder")
     try:
@@ -160,7 +160,7 @@ def check_output_folder(path: str | os.PathLike[str], what: str) -> Path:
 def check_output_file(path: str | os.PathLike[str], what: str) -> Path:
     """A file path to write (an existing file is replaced); InputError naming ``what`` when it
     is a folder, its folder is missing, or either is not writable."""
-    target = Path(path).expanduser()
+    target = _as_path(path, what)
     if target.is_dir():
         raise InputError(f"{what} {str(target)!r} is a folder; give a file name")
     folder = target.parent
@@ -169,3 +169,12 @@ def check_output_file(path: str | os.PathLike[str], what: str) -> Path:
     if not os.access(folder, os.W_OK | os.X_OK) or (target.exists() and not os.access(target, os.W_OK)):
         raise InputError(f"{what} {str(target)!r} is not writable")
     return target
+
+
+def _as_path(path: object, what: str) -> Path:
+    if not isinstance(path, str | os.PathLike) or str(path) == "":
+        raise InputError(f"{what} must be a path, got {path!r}")
+    try:
+        return Path(path).expanduser()
+    except RuntimeError as error:  # ~unknownuser
+        raise InputError(f"{what} {str(path)!r}: {error}") from None

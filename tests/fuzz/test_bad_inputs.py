@@ -32,6 +32,10 @@ def scara_l3(value: float) -> pinrate.Robot:
     return pinrate.robots.scara(l3=value)
 
 
+def small_report(robot: pinrate.Robot) -> analysis.Report:
+    return analysis.analyze(robot, samples=10, points=2, rng=0)
+
+
 def cases(ur5: pinrate.Robot) -> list[tuple[str, Callable[[], object], type[Exception], str]]:
     """(case, the call, the error class, a phrase of its message)."""
     q = ur5.home()
@@ -173,6 +177,8 @@ def cases(ur5: pinrate.Robot) -> list[tuple[str, Callable[[], object], type[Exce
         ("robots.build(123)", lambda: pinrate.robots.build(123), pinrate.InputError, "robot name"),
         ("robots.urdf(['scara'])", lambda: pinrate.robots.urdf(["scara"]), pinrate.InputError, "robot name"),
         ("robots.parameters(None)", lambda: pinrate.robots.parameters(None), pinrate.InputError, "robot name"),
+        ("robots.write_urdfs(None)", lambda: pinrate.robots.write_urdfs(None), pinrate.InputError, "path"),
+        ("write_report into ''", lambda: analysis.write_report(small_report(ur5), ""), pinrate.InputError, "path"),
         (
             "robots.write_urdfs onto a file",
             lambda: pinrate.robots.write_urdfs("/etc/hostname"),

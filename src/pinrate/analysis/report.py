@@ -17,7 +17,6 @@ The data come from :mod:`.structure`, :mod:`.design`, :mod:`.regions` and :mod:`
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -168,8 +167,6 @@ def write_report(report: Report, folder: str | Path) -> Path:
     """Write ``report.md`` and its PNGs into ``folder``; returns the Markdown path."""
     if not isinstance(report, Report):
         raise InputError(f"write_report takes the Report that analyze() returns, not {type(report).__name__}")
-    if not isinstance(folder, str | os.PathLike):
-        raise InputError(f"report folder must be a path, not {folder!r}")
     out = check_output_folder(folder, "report folder")
     name = report.robot.name
     if report.region is not None:
