@@ -65,6 +65,7 @@ class Robot:
         sensor: name of the frame whose axes twists are expressed in.
         joint_names: the moving joints, in velocity-vector order.
         reference_configurations: named configurations (from the SRDF, plus ``"home"``).
+        home_choice: where :meth:`home` comes from (a reference, an SRDF state, a search, neutral).
     """
 
     def __init__(
@@ -125,6 +126,9 @@ class Robot:
         self.reference_configurations: dict[str, np.ndarray] = {
             key: np.array(value, dtype=float) for key, value in (reference_configurations or {}).items()
         }
+        self.home_choice = (
+            "the 'home' reference configuration" if "home" in self.reference_configurations else "neutral"
+        )
 
     # ------------------------------------------------------------------ sizes and names
     @property
@@ -169,7 +173,9 @@ class Robot:
         return np.array(pin.neutral(self.model))
 
     def home(self) -> np.ndarray:
-        """A non-singular start pose: the ``home`` reference configuration, else neutral."""
+        """The start pose: the ``home`` reference configuration (for a URDF loaded by path, a
+        well-conditioned one that :mod:`pinrate.kinematics.home` found), else neutral;
+        :attr:`home_choice` says which."""
         if "home" in self.reference_configurations:
             return self.reference_configurations["home"].copy()
         return self.neutral()

@@ -25,7 +25,9 @@ import pinocchio as pin
 
 from ..checks import check_count
 from ..errors import LoadError
+from .home import find_home, srdf_states
 from .manipulator import Robot, RobotSpec
+from .partition import Partition
 from .urdf_structure import check_structure, max_joints_default
 
 # ---------------------------------------------------------------------- loading
@@ -190,10 +192,13 @@ def robot_from_urdf(
     home_values: Mapping[str, float] | None = None,
     name: str | None = None,
     max_joints: int | None = None,
+    search_home: bool = False,
 ) -> Robot:
     """A Robot from URDF text: the common path of every way of loading.
 
     ``max_joints`` bounds the moving joints (default :func:`.urdf_structure.max_joints_default`).
+    ``search_home``: a URDF without a curated home gets a well-conditioned one
+    (:func:`.home.find_home`: the SRDF's ``home`` group_state, else its first, else a search).
     """
     limit = max_joints_default() if max_joints is None else check_count(max_joints, "max_joints", minimum=1)
     root = _check_urdf_text(text, label, limit)
@@ -216,7 +221,7 @@ def robot_from_urdf(
     if "home" in references:
         references["home"] = into_limits(model, references["home"])
     robot_name = name or root.get("name") or label
-    return Robot(
+    robot = Robot(
         model,
         tip=tip,
         sensor=sensor,
@@ -227,6 +232,16 @@ def robot_from_urdf(
         reference_configurations=references,
         mimic=mimic_joints(root),
     )
+    if search_home:
+        states = srdf_states(srdf_path) if srdf_path is not None and srdf_path.is_file() else []
+        order = [state for state in (["home"] if "home" in states else []) + states if state in references]
+        named = [
+            (f"SRDF group_state {state!r}", into_limits(model, references[state])) for state in dict.fromkeys(order)
+        ]
+        q, why = find_home(robot, Partition.auto(robot), named)
+        robot.reference_configurations["home"] = q
+        robot.home_choice = why
+    return robot
 
 
 def mimic_joints(root: ET.Element) -> dict[str, str]:

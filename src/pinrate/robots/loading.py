@@ -66,6 +66,8 @@ def load(
             urdf_path=path if encoding in ("utf-8", "ascii") else None,
             package_dirs=[*_checked_dirs(package_dirs), *_package_dirs_for(path)],
             max_joints=max_joints,
+            srdf_path=path.with_suffix(".srdf"),
+            search_home=True,
         )
     if not isinstance(source, str):
         raise InputError(f"source must be a URDF path or a robot name, not {type(source).__name__}")

@@ -1,0 +1,119 @@
+"""A well-conditioned home for any URDF (pinrate.kinematics.home; contract v2)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pinrate
+from pinrate.kinematics.home import WELL_CONDITIONED
+from pinrate.robots import example_robot_data_share
+
+SHARE = example_robot_data_share()
+FILES = [
+    "panda_description/urdf/panda.urdf",
+    "so_arm_description/urdf/so100.urdf",
+    "z1_description/urdf/z1.urdf",
+    "kinova_description/robots/kinova.urdf",
+    "ur_description/urdf/ur5_robot.urdf",
+    "xarm_description/urdf/xarm7.urdf",
+    "baxter_description/urdf/baxter.urdf",
+]
+
+
+def smallest_singular_values(robot: pinrate.Robot, q: np.ndarray) -> list[float]:
+    """σ_min of the partition's J and of its square blocks, from numpy's SVD (independent of
+    pinrate.kinematics.home)."""
+    partition = pinrate.Partition.auto(robot)
+    columns = [c for joint in partition.joints for c in robot.velocity_indices(joint)]
+    rows = ["xyz".index(a) for a in partition.linear] + [3 + "xyz".index(a) for a in partition.angular]
+    jacobian = robot.jacobian(q)[np.ix_(rows, columns)]
+    arm = sum(len(robot.velocity_indices(joint)) for joint in partition.arm)
+    blocks = (jacobian[: partition.m, :arm], jacobian[partition.m :, arm:])
+    square = [block for block in blocks if block.size and block.shape[0] == block.shape[1]]
+    return [float(np.linalg.svd(block, compute_uv=False).min()) for block in (jacobian, *square)]
+
+
+@pytest.mark.skipif(SHARE is None, reason="example-robot-data is not installed")
+@pytest.mark.parametrize("relative", FILES, ids=[Path(f).stem for f in FILES])
+def test_a_urdf_by_path_starts_well_conditioned_inside_its_limits(relative: str) -> None:
+    path = SHARE / "example-robot-data" / "robots" / relative
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot, again = pinrate.load(path), pinrate.load(path)
+    home = robot.home()
+    np.testing.assert_array_equal(home, again.home())  # deterministic
+    lower, upper = robot.position_limits()
+    assert np.all(home >= lower - 1e-12) and np.all(home <= upper + 1e-12)
+    assert min(smallest_singular_values(robot, home)) >= WELL_CONDITIONED, robot.home_choice
+
+
+LIMIT = '<limit lower="-2.5" upper="2.5" effort="1" velocity="1"/>'
+PLANAR = f"""<robot name="planar"><link name="base"/><link name="upper"/><link name="fore"/><link name="tcp"/>
+<joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 0 1"/>{LIMIT}</joint>
+<joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0.5 0 0"/>
+<axis xyz="0 0 1"/>{LIMIT}</joint>
+<joint name="tool" type="fixed"><parent link="fore"/><child link="tcp"/><origin xyz="0.4 0 0"/></joint></robot>"""
+
+
+def test_a_stretched_neutral_is_replaced_by_a_bent_elbow(tmp_path: Path) -> None:
+    path = tmp_path / "planar.urdf"
+    path.write_text(PLANAR, encoding="utf-8")
+    robot = pinrate.load(path)
+    # At elbow = 0 the planar Jacobian's determinant 0.5 * 0.4 * sin(elbow) vanishes.
+    assert robot.home_choice.startswith("searched near neutral")
+    assert abs(0.5 * 0.4 * np.sin(robot.home()[1])) >= WELL_CONDITIONED
+
+
+def srdf(states: dict[str, float]) -> str:
+    body = "".join(
+        f'<group_state name="{name}" group="arm"><joint name="shoulder" value="0.3"/>'
+        f'<joint name="elbow" value="{elbow}"/></group_state>'
+        for name, elbow in states.items()
+    )
+    return f'<robot name="planar"><group name="arm"><chain base_link="base" tip_link="tcp"/></group>{body}</robot>'
+
+
+@pytest.mark.parametrize(
+    ("states", "chosen", "elbow"),
+    [
+        ({"ready": 1.1, "home": 0.9}, "SRDF group_state 'home'", 0.9),  # 'home' first, whatever the order
+        ({"home": 0.0, "ready": 1.1}, "SRDF group_state 'ready'", 1.1),  # a singular 'home' is passed over
+        ({"stretched": 0.0}, "searched near neutral", None),  # no usable state: the search
+    ],
+)
+def test_an_srdf_beside_the_urdf_gives_the_home(tmp_path: Path, states: dict, chosen: str, elbow: float | None) -> None:
+    (tmp_path / "planar.urdf").write_text(PLANAR, encoding="utf-8")
+    (tmp_path / "planar.srdf").write_text(srdf(states), encoding="utf-8")
+    robot = pinrate.load(tmp_path / "planar.urdf")
+    assert robot.home_choice.startswith(chosen)
+    if elbow is not None:
+        np.testing.assert_allclose(robot.home(), [0.3, elbow])
+
+
+CONVERGING_BY_PATH = [
+    "panda_description/urdf/panda.urdf",
+    "so_arm_description/urdf/so100.urdf",
+    "so_arm_description/urdf/so101.urdf",
+    "z1_description/urdf/z1.urdf",
+    "ur_description/urdf/ur5_robot.urdf",
+    "ur_description/urdf/ur10_robot.urdf",
+    "xarm_description/urdf/xarm7.urdf",
+]
+
+
+@pytest.mark.skipif(SHARE is None, reason="example-robot-data is not installed")
+@pytest.mark.parametrize("relative", CONVERGING_BY_PATH, ids=[Path(f).stem for f in CONVERGING_BY_PATH])
+def test_the_demo_converges_by_path_with_its_defaults(relative: str, capsys: pytest.CaptureFixture[str]) -> None:
+    # Default tip, home and partition, three random nearby targets (the demo's defaults):
+    # before this issue these started at a singular neutral or with a finger as the tip.
+    from pinrate.cli import main
+
+    path = SHARE / "example-robot-data" / "robots" / relative
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        codes = [main(["demo", str(path), "--no-viewer", "--seed", str(seed)]) for seed in range(3)]
+    assert codes == [0, 0, 0], capsys.readouterr().out[-1500:]
