@@ -37,6 +37,8 @@ def cases(tmp: Path) -> list[tuple[list[str], str]]:
         (["demo", "ur5", "--host", "256.1.1.1"], "host '256.1.1.1'"),
         (["demo", "ur5", "--tip", "nosuch"], "no frame 'nosuch'"),
         (["demo", "ur5", "--max-joints", "0"], "--max-joints: must be at least 1"),
+        (["demo", "ur5", "--q0", "0", "1"], "--q0 takes 6 values"),
+        (["demo", "ur5", "--q0", "0", "0", "0", "0", "0", "1e9"], "physical bound"),
         (["demo", "ur55"], "unknown robot name 'ur55'"),
         (["demo", str(tmp / "arm.urdf.xacro")], "expand it first"),
         (["demo", str(tmp / "missing.urdf")], "not found"),

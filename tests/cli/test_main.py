@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from pinrate.cli import main
@@ -52,3 +53,17 @@ def test_demo_reports_an_automatic_tip(capsys: pytest.CaptureFixture[str]) -> No
     main(["demo", str(DATA / "mixed_joints.urdf"), "--no-viewer", "--max-steps", "5"])
     out = capsys.readouterr().out
     assert "tip        tool (chosen: named like a tool centre on 'pitch'" in out and "left out: finger_joint" in out
+
+
+def test_demo_starts_at_q0_given_per_joint(capsys: pytest.CaptureFixture[str]) -> None:
+    import pinrate
+    from pinrate.kinematics.targets import nearby_target
+
+    q0 = np.array([0.1, -1.2, 1.3, -1.4, -1.5, 0.2])
+    assert main(["demo", "ur5", "--no-viewer", "--max-steps", "1", "--q0", *map(str, q0)]) in (0, 1)
+    out = capsys.readouterr().out
+    printed = float(out.split("errors     position ")[1].split(" ")[0])
+    # The first error is measured at q0, towards the target drawn near q0 (seed 0).
+    ur5 = pinrate.load("ur5")
+    _, target = nearby_target(ur5, pinrate.Partition.auto(ur5), 0, start=q0)
+    assert printed == pytest.approx(np.linalg.norm(target[:3, 3] - ur5.pose(q0)[:3, 3]), rel=1e-3)

@@ -75,11 +75,11 @@ def status_line(index: int, count: int, trajectory: Trajectory) -> str:
     )
 
 
-def _targets(args: argparse.Namespace, robot: Robot, partition: Partition) -> list[np.ndarray]:
+def _targets(args: argparse.Namespace, robot: Robot, partition: Partition, start: np.ndarray) -> list[np.ndarray]:
     if args.target is not None:
         x, y, z, roll, pitch, yaw = args.target
         return [pin.SE3(pin.rpy.rpyToMatrix(roll, pitch, yaw), np.array([x, y, z])).homogeneous]
-    return [nearby_target(robot, partition, args.seed + k)[1] for k in range(args.targets)]
+    return [nearby_target(robot, partition, args.seed + k, start=start)[1] for k in range(args.targets)]
 
 
 def _load(args: argparse.Namespace) -> Robot:
@@ -97,7 +97,8 @@ def _demo(args: argparse.Namespace) -> int:
         record = check_output_file(args.record, "--record")
     robot = _load(args)
     partition = Partition.auto(robot)
-    targets = _targets(args, robot, partition)
+    start = robot.home() if args.q0 is None else _start(robot, args.q0)
+    targets = _targets(args, robot, partition, start)
     viewer = None
     if not args.no_viewer:
         from ..viewer import Viewer  # meshcat is imported only when a view is asked for
@@ -109,7 +110,7 @@ def _demo(args: argparse.Namespace) -> int:
             warn(str(warning.message))
         print(f"Meshcat viewer: {viewer.url}", flush=True)
     try:
-        q = robot.home()
+        q = start
         if viewer is not None:
             viewer.show(q)
         all_converged = True
@@ -154,6 +155,20 @@ def _demo(args: argparse.Namespace) -> int:
     finally:
         if viewer is not None:
             viewer.close()
+
+
+def _start(robot: Robot, values: list[float]) -> np.ndarray:
+    """--q0: one value per moving joint in ``robot.joint_names`` order (an angle for a
+    continuous joint), checked like any q."""
+    if len(values) != len(robot.joint_names):
+        raise InputError(
+            f"--q0 takes {len(robot.joint_names)} values, one per moving joint ({', '.join(robot.joint_names)}); "
+            f"got {len(values)}"
+        )
+    q = robot.neutral()[None, :]
+    for joint, value in zip(robot.joint_names, values, strict=True):
+        robot.set_joint_values(q, joint, np.array([value]))
+    return robot.check_q(q[0])
 
 
 def _partition_from_args(args: argparse.Namespace, robot: Robot) -> Partition:
@@ -271,6 +286,13 @@ def build_parser() -> argparse.ArgumentParser:
         type=finite,
         metavar=("X", "Y", "Z", "R", "P", "Y"),
         help="target tip pose in the world: metres and roll-pitch-yaw radians",
+    )
+    demo.add_argument(
+        "--q0",
+        nargs="+",
+        type=finite,
+        metavar="Q",
+        help="start configuration: one value per moving joint, rad or m (default: the robot's home)",
     )
     demo.add_argument("--seed", type=count(0), default=0, help="seed of the default random target (>= 0)")
     demo.add_argument("--dt", type=positive, default=0.01, help="control period in seconds")

@@ -12,13 +12,18 @@ TARGET_SPREAD = 0.4
 
 
 def nearby_target(
-    robot: Robot, partition: Partition, seed: int | None, *, spread: float = TARGET_SPREAD
+    robot: Robot,
+    partition: Partition,
+    seed: int | None,
+    *,
+    spread: float = TARGET_SPREAD,
+    start: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(q_target, world_T_tip at q_target): home moved by a uniform random offset in
-    [-spread, spread] of each partition joint, clipped to the joint limits. Reachable by
-    construction."""
+    """(q_target, world_T_tip at q_target): ``start`` (default: home) moved by a uniform random
+    offset in [-spread, spread] of each partition joint, clipped to the joint limits.
+    Reachable by construction."""
     rng = np.random.default_rng(seed)
-    home = robot.home()
+    home = robot.home() if start is None else robot.check_q(start)
     offset = np.zeros(robot.nv)
     for joint in partition.joints:
         offset[robot.velocity_indices(joint)] = rng.uniform(-spread, spread)
