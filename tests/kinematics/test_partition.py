@@ -90,3 +90,21 @@ def test_bad_axis_letters(linear: str, angular: str) -> None:
 def test_jacobian_of_the_wrong_shape(ur5: pinrate.Robot) -> None:
     with pytest.raises(pinrate.InputError, match="shape"):
         Partition.auto(ur5).blocks(ur5, np.zeros((6, 5)))
+
+
+def test_block_shapes_count_velocity_components(tmp_path) -> None:
+    # A planar base joint has 3 velocity components: with j1, A is 3x4, not "3x2".
+    limit = '<limit lower="-2" upper="2" effort="1" velocity="1"/>'
+    text = (
+        '<robot name="mobile"><link name="world"/><link name="base"/><link name="l1"/><link name="l2"/>'
+        '<joint name="floor" type="planar"><parent link="world"/><child link="base"/><axis xyz="0 0 1"/></joint>'
+        f'<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 1 0"/>{limit}</joint>'
+        f'<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.5"/>'
+        f'<axis xyz="0 1 0"/>{limit}</joint></robot>'
+    )
+    path = tmp_path / "mobile.urdf"
+    path.write_text(text, encoding="utf-8")
+    robot = pinrate.load(path)
+    partition = pinrate.Partition(("floor", "j1"), (), linear="xyz", angular="")
+    assert "A is 3x4, W is 0x0" in partition.describe(robot)
+    assert "A is 3x2" in str(partition)  # without the robot: joints, as before

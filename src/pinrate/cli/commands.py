@@ -53,7 +53,7 @@ def summary(robot: Robot, trajectory: Trajectory) -> str:
     radius = radius_range(trajectory)
     lines = [
         f"robot      {robot.name}   tip {robot.tip}   sensor {robot.sensor}",
-        "partition  " + str(trajectory.partition).replace("\n", "\n           "),
+        "partition  " + trajectory.partition.describe(robot).replace("\n", "\n           "),
         f"algorithm  {trajectory.algorithm}   dt {trajectory.dt:g} s",
         f"steps      {trajectory.steps}   ({trajectory.steps * trajectory.dt:.2f} s)",
         f"converged  {'yes' if trajectory.converged else 'no'}: {trajectory.reason}",
@@ -135,7 +135,7 @@ def _demo(args: argparse.Namespace) -> int:
                 print(summary(robot, trajectory))
             else:
                 if index == 1:
-                    print("partition  " + str(partition).replace("\n", "\n           "))
+                    print("partition  " + partition.describe(robot).replace("\n", "\n           "))
                 print(status_line(index, len(targets), trajectory), flush=True)
             if viewer is not None:
                 viewer.play(trajectory, target=target, speed=args.speed)

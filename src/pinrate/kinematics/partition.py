@@ -165,13 +165,24 @@ class Partition:
         return split_blocks(jacobian[np.ix_(index.rows, index.columns)], index.m, len(index.arm_columns))
 
     def __str__(self) -> str:
+        return self.describe()
+
+    def describe(self, robot: Robot | None = None) -> str:
+        """The partition in three lines; with ``robot``, the block shapes count velocity
+        components, so a multi-DOF joint (planar: 3, floating: 6) counts as many columns."""
+
         def joints(names: tuple[str, ...]) -> str:
             return ", ".join(names) if names else "none"
 
+        if robot is None:
+            n_arm, n_wrist = len(self.arm), len(self.wrist)
+        else:
+            index = self.resolve(robot)
+            n_arm, n_wrist = len(index.arm_columns), len(index.wrist_columns)
         lines = [
             f"arm ({len(self.arm)} joints, drive linear {self.linear or 'none'} through A): {joints(self.arm)}",
             f"wrist ({len(self.wrist)} joints, drive angular {self.angular or 'none'} through W): {joints(self.wrist)}",
-            f"A is {self.m}x{len(self.arm)}, W is {self.k}x{len(self.wrist)}; "
+            f"A is {self.m}x{n_arm}, W is {self.k}x{n_wrist}; "
             f"G = U A^-1 B W^-1 is {self.k}x{self.k}, H = B W^-1 U A^-1 is {self.m}x{self.m}",
         ]
         return "\n".join(lines)
