@@ -218,3 +218,45 @@ def test_recorded_html_replays_offline(browser, scene, tmp_path) -> None:
     for name, transform in expected_transforms(viewer, trajectory.q[-1]).items():
         np.testing.assert_allclose(page_matrix(page, name), transform, atol=1e-4, err_msg=name)
     page.close()
+
+
+@pytest.mark.parametrize("name", ["ur5", "scara", "panda"])
+def test_the_view_frames_the_robot_and_its_targets(browser, name: str) -> None:
+    # Three sizes (a 0.5 m SCARA, a 0.9 m UR5, a 1.1 m panda): the robot's pixels (shown minus
+    # hidden) lie inside the picture with a margin on every side, and fill a fair part of it.
+    from PIL import Image, ImageChops
+
+    import pinrate.viewer
+
+    robot = pinrate.load(name)
+    partition = pinrate.Partition.auto(robot)
+    targets = [nearby_target(robot, partition, seed)[1] for seed in range(3)]
+    viewer = pinrate.viewer.Viewer(robot)
+    try:
+        viewer.frame(robot.home(), [target[:3, 3] for target in targets])
+        viewer.show(robot.home())
+        for index, target in enumerate(targets):
+            viewer.set_frame(f"target{index}", target)
+        page = open_page(browser, viewer.url)
+        wait_for_meshes(page, viewer)
+        page.wait_for_timeout(500)
+        shown = Image.open(io.BytesIO(page.screenshot())).convert("RGB")
+        page.evaluate(f"""() => {{
+            const node = ({WALK})(["meshcat", "{pinrate.viewer.ROOT}"]);
+            node.object.visible = false;
+            window.viewer.set_dirty();
+        }}""")
+        page.wait_for_timeout(500)
+        hidden = Image.open(io.BytesIO(page.screenshot())).convert("RGB")
+        page.close()
+    finally:
+        viewer.close()
+    changed = ImageChops.difference(shown, hidden).convert("L").point(lambda v: 255 if v > 16 else 0)
+    box = changed.getbbox()
+    assert box is not None
+    left, top, right, bottom = box
+    width, height = shown.size
+    margin = 0.03
+    assert left >= margin * width and right <= (1 - margin) * width, (box, shown.size)
+    assert top >= margin * height and bottom <= (1 - margin) * height, (box, shown.size)
+    assert max((right - left) / width, (bottom - top) / height) >= 0.3, box  # not a speck in the distance

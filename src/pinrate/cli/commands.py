@@ -112,6 +112,7 @@ def _demo(args: argparse.Namespace) -> int:
     try:
         q = start
         if viewer is not None:
+            viewer.frame(q, [target[:3, 3] for target in targets])
             viewer.show(q)
         all_converged = True
         for index, target in enumerate(targets, start=1):

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import math
 import os
 import time
 import webbrowser
@@ -55,6 +56,19 @@ def triad(length: float = 0.1, width: float = 3.0, opacity: float = 1.0) -> tupl
             g.LineBasicMaterial(vertexColors=True, linewidth=width, opacity=opacity),
         ),
     )
+
+
+CAMERA_DIRECTION = np.array([1.0, -1.25, 0.85]) / np.linalg.norm([1.0, -1.25, 0.85])
+"""From the scene's centre towards the camera: an elevated three-quarter view (world axes)."""
+
+CAMERA_FOV_DEGREES = 75.0
+"""meshcat's default vertical field of view."""
+
+CAMERA_FILL = 0.9
+"""Every framed point stays within this share of the half field of view from the view axis."""
+
+MESH_PADDING = 0.08
+"""Metres added around frame origins for the link meshes' thickness."""
 
 
 def path_colours(spectral_radius: np.ndarray) -> np.ndarray:
@@ -97,12 +111,35 @@ class Viewer:
         self._paths = 0
         self.meshcat["markers/tcp"].set_object(*triad(0.08))
         self.meshcat["markers/sensor"].set_object(*triad(0.05, opacity=0.6))
-        reach = max(0.3, float(np.linalg.norm(self.tip_position(robot.home()))))
-        self.set_camera(np.array([1.2, -1.5, 0.55]) * reach)
+        self.frame(robot.home())
         if open_browser:
             webbrowser.open(self.url, new=2)
 
     # ------------------------------------------------------------------ drawing
+    def frame(self, q: np.ndarray, points: Sequence[Sequence[float]] | np.ndarray = ()) -> None:
+        """Frame the robot at q (every frame's origin, padded for the link meshes) and
+        ``points`` (world, metres; the targets) from an elevated three-quarter view.
+
+        meshcat 0.3.2's orbit controls always look at the world origin (it has no command to
+        move their target), so the scene moves instead: ``/meshcat`` (everything pinrate
+        draws), the grid and the axes are shifted by minus the bounding box's centre, and the
+        camera sits along CAMERA_DIRECTION far enough for the box's sphere to fit
+        CAMERA_FILL of meshcat's 75° field of view. Poses relative to ``/meshcat`` are
+        unchanged.
+        """
+        model, data = self.robot.model, self.data
+        pin.framesForwardKinematics(model, data, self.robot.check_q(q))
+        origins = [np.asarray(placement.translation) for placement in data.oMf]
+        cloud = np.vstack([*origins, *np.asarray(points, dtype=float).reshape(-1, 3)])
+        low, high = cloud.min(axis=0) - MESH_PADDING, cloud.max(axis=0) + MESH_PADDING
+        shift = np.eye(4)
+        shift[:3, 3] = -(low + high) / 2
+        for path in ("/meshcat", "/Grid", "/Axes"):
+            self.meshcat[path].set_transform(shift)
+        radius = float(np.linalg.norm(high - low)) / 2
+        distance = radius / math.sin(CAMERA_FILL * math.radians(CAMERA_FOV_DEGREES) / 2)
+        self.set_camera(CAMERA_DIRECTION * distance)
+
     def set_camera(self, position: Sequence[float] | np.ndarray) -> None:
         """Put the camera at ``position`` (world frame, Z up), looking at the origin.
 
