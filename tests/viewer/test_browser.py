@@ -181,11 +181,11 @@ def test_target_and_path_exist(browser, scene) -> None:
     page.close()
 
 
-def test_screenshot_changes_when_the_robot_is_hidden(browser, scene) -> None:
+def robot_pixels(page, viewer):
+    """The pixels the robot covers: a screenshot with it shown against one with its root node
+    hidden, thresholded (a black-and-white PIL image the size of the page)."""
     from PIL import Image, ImageChops
 
-    viewer, _, _ = scene
-    page = open_page(browser, viewer.url)
     wait_for_meshes(page, viewer)
     page.wait_for_timeout(500)
     shown = Image.open(io.BytesIO(page.screenshot())).convert("RGB")
@@ -196,7 +196,13 @@ def test_screenshot_changes_when_the_robot_is_hidden(browser, scene) -> None:
     }}""")
     page.wait_for_timeout(500)
     hidden = Image.open(io.BytesIO(page.screenshot())).convert("RGB")
-    changed = ImageChops.difference(shown, hidden).convert("L").point(lambda v: 255 if v > 16 else 0)
+    return ImageChops.difference(shown, hidden).convert("L").point(lambda v: 255 if v > 16 else 0)
+
+
+def test_screenshot_changes_when_the_robot_is_hidden(browser, scene) -> None:
+    viewer, _, _ = scene
+    page = open_page(browser, viewer.url)
+    changed = robot_pixels(page, viewer)
     assert changed.getbbox() is not None
     assert sum(changed.histogram()[255:]) > 500  # hundreds of pixels, not noise
     page.close()
@@ -224,8 +230,6 @@ def test_recorded_html_replays_offline(browser, scene, tmp_path) -> None:
 def test_the_view_frames_the_robot_and_its_targets(browser, name: str) -> None:
     # Three sizes (a 0.5 m SCARA, a 0.9 m UR5, a 1.1 m panda): the robot's pixels (shown minus
     # hidden) lie inside the picture with a margin on every side, and fill a fair part of it.
-    from PIL import Image, ImageChops
-
     import pinrate.viewer
 
     robot = pinrate.load(name)
@@ -238,25 +242,15 @@ def test_the_view_frames_the_robot_and_its_targets(browser, name: str) -> None:
         for index, target in enumerate(targets):
             viewer.set_frame(f"target{index}", target)
         page = open_page(browser, viewer.url)
-        wait_for_meshes(page, viewer)
-        page.wait_for_timeout(500)
-        shown = Image.open(io.BytesIO(page.screenshot())).convert("RGB")
-        page.evaluate(f"""() => {{
-            const node = ({WALK})(["meshcat", "{pinrate.viewer.ROOT}"]);
-            node.object.visible = false;
-            window.viewer.set_dirty();
-        }}""")
-        page.wait_for_timeout(500)
-        hidden = Image.open(io.BytesIO(page.screenshot())).convert("RGB")
+        changed = robot_pixels(page, viewer)
         page.close()
     finally:
         viewer.close()
-    changed = ImageChops.difference(shown, hidden).convert("L").point(lambda v: 255 if v > 16 else 0)
     box = changed.getbbox()
     assert box is not None
     left, top, right, bottom = box
-    width, height = shown.size
+    width, height = changed.size
     margin = 0.03
-    assert left >= margin * width and right <= (1 - margin) * width, (box, shown.size)
-    assert top >= margin * height and bottom <= (1 - margin) * height, (box, shown.size)
+    assert left >= margin * width and right <= (1 - margin) * width, (box, changed.size)
+    assert top >= margin * height and bottom <= (1 - margin) * height, (box, changed.size)
     assert max((right - left) / width, (bottom - top) / height) >= 0.3, box  # not a speck in the distance
