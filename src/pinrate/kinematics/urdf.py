@@ -87,7 +87,7 @@ def decode_xml(data: bytes, label: str) -> tuple[str, str]:
         ) from None
     except (UnicodeError, ValueError) as error:  # codecs such as punycode raise other errors
         raise LoadError(f"{label}: cannot be read as {encoding!r}, the encoding it declares ({error})") from None
-    return _ANY_DECLARATION.sub("", text.lstrip("\ufeff"), count=1), codecs.lookup(encoding).name
+    return _ANY_DECLARATION.sub("", text, count=1), codecs.lookup(encoding).name
 
 
 _XACRO_HINT = (
