@@ -26,27 +26,53 @@ from types import FrameType
 INTERRUPTED = 130
 TERMINATED = 143
 BROKEN_PIPE = 141
-
-
-class _Interrupts:
-    """Whether SIGINT arrived: an extension module that clears Python errors (Boost.Python
-    code run while Pinocchio imports) can swallow the KeyboardInterrupt, so the flag is
-    checked again once the imports are done."""
-
-    seen = False
-
-    @classmethod
-    def handle(cls, signum: int, frame: FrameType | None) -> None:
-        cls.seen = True
-        raise KeyboardInterrupt
+REDELIVERY_DELAY = 0.01
+"""Seconds before a swallowed signal is sent again (see :class:`_Signals`)."""
 
 
 class Terminated(SystemExit):
     """Raised in the main thread on SIGTERM, so ``finally`` blocks (the viewer's server) run."""
 
 
-def _terminate(signum: int, frame: FrameType | None) -> None:
-    raise Terminated(TERMINATED)
+class _Signals:
+    """Which of SIGINT and SIGTERM arrived, and their delivery as exceptions.
+
+    Two places in CPython can swallow the exception a handler raises: an extension module
+    that clears Python errors (Boost.Python code run while Pinocchio imports), and a callback
+    whose exception CPython can only report as "Exception ignored in ..." (the weak-reference
+    callback of an import lock, run by the garbage collector at any moment). The first is
+    caught by checking :attr:`seen` once the imports are done; the second by
+    :meth:`unraisable`, which reports nothing and has the signal sent again a moment later
+    (:data:`REDELIVERY_DELAY`, from another thread: sent from the hook itself, it would be
+    handled inside the hook and swallowed once more), so it surfaces in ordinary code.
+    """
+
+    seen: int | None = None
+    default_unraisable = staticmethod(sys.__unraisablehook__)
+
+    @classmethod
+    def handle(cls, signum: int, frame: FrameType | None) -> None:
+        cls.seen = signum
+        raise cls.exception(signum)
+
+    @staticmethod
+    def exception(signum: int) -> BaseException:
+        return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(TERMINATED)
+
+    @classmethod
+    def unraisable(cls, report: sys.UnraisableHookArgs) -> None:
+        if cls.seen is not None and isinstance(report.exc_value, (KeyboardInterrupt, Terminated)):
+            redelivery = threading.Timer(REDELIVERY_DELAY, os.kill, (os.getpid(), cls.seen))
+            redelivery.daemon = True
+            redelivery.start()
+            return
+        cls.default_unraisable(report)
+
+    @classmethod
+    def raise_swallowed(cls) -> None:
+        """Raise the signal's exception if it arrived but something swallowed it."""
+        if cls.seen is not None:
+            raise cls.exception(cls.seen)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -55,8 +81,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         from .commands import run  # inside the guard: importing Pinocchio takes a second
 
-        if _Interrupts.seen:  # interrupted while importing, and something swallowed it
-            raise KeyboardInterrupt
+        _Signals.raise_swallowed()  # a signal while importing, swallowed by the extension
         return run(argv)
     except KeyboardInterrupt:
         _quiet_print("pinrate: interrupted")
@@ -77,20 +102,25 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _own_signals() -> dict[int, object]:
     """SIGINT raises KeyboardInterrupt and SIGTERM :class:`Terminated`, whatever was
-    inherited; the previous handlers are returned for :func:`_restore_signals` (so a test
-    calling ``main`` in-process keeps its own)."""
+    inherited; the previous handlers (and unraisable hook) are returned for
+    :func:`_restore_signals`, so a test calling ``main`` in-process keeps its own."""
     if threading.current_thread() is not threading.main_thread():
         return {}
-    previous = {}
-    _Interrupts.seen = False
-    for signum, handler in ((signal.SIGINT, _Interrupts.handle), (signal.SIGTERM, _terminate)):
-        previous[signum] = signal.signal(signum, handler)
+    _Signals.seen = None
+    previous: dict[int, object] = {
+        signum: signal.signal(signum, _Signals.handle) for signum in (signal.SIGINT, signal.SIGTERM)
+    }
+    _Signals.default_unraisable = sys.unraisablehook
+    sys.unraisablehook = _Signals.unraisable
     return previous
 
 
 def _restore_signals(previous: dict[int, object]) -> None:
+    if not previous:
+        return
     for signum, handler in previous.items():
         signal.signal(signum, handler)  # type: ignore[arg-type]
+    sys.unraisablehook = _Signals.default_unraisable
 
 
 def _quiet_print(message: str) -> None:
