@@ -92,28 +92,3 @@ def test_an_srdf_beside_the_urdf_gives_the_home(tmp_path: Path, states: dict, ch
     assert robot.home_choice.startswith(chosen)
     if elbow is not None:
         np.testing.assert_allclose(robot.home(), [0.3, elbow])
-
-
-CONVERGING_BY_PATH = [
-    "panda_description/urdf/panda.urdf",
-    "so_arm_description/urdf/so100.urdf",
-    "so_arm_description/urdf/so101.urdf",
-    "z1_description/urdf/z1.urdf",
-    "ur_description/urdf/ur5_robot.urdf",
-    "ur_description/urdf/ur10_robot.urdf",
-    "xarm_description/urdf/xarm7.urdf",
-]
-
-
-@pytest.mark.skipif(SHARE is None, reason="example-robot-data is not installed")
-@pytest.mark.parametrize("relative", CONVERGING_BY_PATH, ids=[Path(f).stem for f in CONVERGING_BY_PATH])
-def test_the_demo_converges_by_path_with_its_defaults(relative: str, capsys: pytest.CaptureFixture[str]) -> None:
-    # Default tip, home and partition, three random nearby targets (the demo's defaults):
-    # before this issue these started at a singular neutral or with a finger as the tip.
-    from pinrate.cli import main
-
-    path = SHARE / "example-robot-data" / "robots" / relative
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        codes = [main(["demo", str(path), "--no-viewer", "--seed", str(seed)]) for seed in range(3)]
-    assert codes == [0, 0, 0], capsys.readouterr().out[-1500:]
