@@ -23,7 +23,7 @@ def test_demo_ur5_converges_and_summarises(capsys: pytest.CaptureFixture[str]) -
     assert main(["demo", "ur5", "--no-viewer"]) == 0
     out = capsys.readouterr().out
     assert "converged  yes" in out
-    for field in ("partition", "algorithm  mca1", "steps", "errors", "rho(G,H)"):
+    for field in ("partition", "algorithm  mca1", "steps", "errors", "rho        ", "coupling   |U A^-1|"):
         assert field in out
 
 

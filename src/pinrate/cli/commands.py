@@ -24,6 +24,7 @@ from ..kinematics.urdf_structure import MAX_JOINTS
 from ..papers import markdown, results
 from ..robots import EXAMPLE_ROBOTS, ROBOT_NAMES, example_robot_data_share, load
 from ..solvers.registry import ALGORITHMS
+from ..theorem.pointwise import THEOREM_ALGORITHMS, coupling_along
 from .arguments import Parser, count, finite, positive, warn
 
 DEMO_MAX_STEPS = 6000
@@ -53,9 +54,54 @@ def radius_range(trajectory: Trajectory) -> str:
     return text if finite.size == trajectory.spectral_radius.size else text + " (singular at some steps)"
 
 
+COUPLING_POINTS = 300
+"""At most this many configurations of a run are tested for the coupling (it is a summary)."""
+
+COUPLING_GROWTH = 5.0
+"""A run that diverged with ρ < 1 throughout, and whose coupling grew by this factor, is
+explained by it (eq. 30)."""
+
+
+def verdict_lines(robot: Robot, trajectory: Trajectory) -> list[str]:
+    """ρ along the run, what it rests on, and the coupling beside it (issue 10: ρ < 1 along a
+    path is not sufficient; MCA1's term −U A⁻¹ v of eq. 30 can grow without bound)."""
+    radius = radius_range(trajectory)
+    algorithm = trajectory.algorithm
+    if algorithm not in THEOREM_ALGORITHMS:
+        return [
+            f"rho        {radius} along the path: MCA1/2/3's, for reference (the Theorem says nothing of {algorithm})"
+        ]
+    index = trajectory.partition.resolve(robot)
+    square = index.m == index.arm_columns.size and len(index.rows) - index.m == index.wrist_columns.size
+    basis = "the Theorem" if square else f"the error map of {algorithm} (blocks not square)"
+    lines = [f"rho        {radius} along the path ({basis}: < 1 at a point means converging there, J frozen)"]
+    if algorithm == "mca3":
+        return lines
+    stride = max(1, len(trajectory.q) // COUPLING_POINTS)
+    coupling = coupling_along(robot, trajectory.q[::stride], partition=trajectory.partition, algorithm=algorithm)
+    finite = coupling[np.isfinite(coupling)]
+    if not finite.size:
+        return lines
+    name, unit, equation = ("|U A^-1|", "rad/m", "30") if algorithm == "mca1" else ("|B W^-1|", "m/rad", "49")
+    lines.append(
+        f"coupling   {name} {finite[0]:.3g} at the start, {finite.max():.3g} at most {unit} (eq. {equation}: it feeds "
+        "the commanded motion into the error and grows as the block nears singularity)"
+    )
+    radii = trajectory.spectral_radius
+    if (
+        trajectory.reason.startswith("diverging")
+        and np.all(radii[np.isfinite(radii)] < 1)
+        and finite.max() >= COUPLING_GROWTH * finite[0]
+    ):
+        lines.append(
+            f"why        diverged although rho < 1 at every step: the coupling grew {finite.max() / finite[0]:.0f}x; "
+            "rho < 1 along a path is necessary for the frozen-J argument, not sufficient"
+        )
+    return lines
+
+
 def summary(robot: Robot, trajectory: Trajectory) -> str:
     """A short, readable account of a servo run."""
-    radius = radius_range(trajectory)
     lines = [
         f"robot      {robot.name}   tip {robot.tip}   sensor {robot.sensor}",
         "partition  " + trajectory.partition.describe(robot).replace("\n", "\n           "),
@@ -64,7 +110,7 @@ def summary(robot: Robot, trajectory: Trajectory) -> str:
         f"converged  {'yes' if trajectory.converged else 'no'}: {trajectory.reason}",
         f"errors     position {trajectory.position_error[0]:.4g} -> {trajectory.position_error[-1]:.3g} m,"
         f"  orientation {trajectory.orientation_error[0]:.4g} -> {trajectory.orientation_error[-1]:.3g} rad",
-        f"rho(G,H)   {radius} along the path (the Theorem asks < 1)",
+        *verdict_lines(robot, trajectory),
     ]
     return "\n".join(lines)
 

@@ -171,7 +171,7 @@ class Controller:
         jacobian, world_T_tip, world_T_sensor = self.robot.kinematics(q)
         error = None if goal is None else pose_error(world_T_tip, world_T_sensor, goal.target)[index.rows]
         parts = closed_form.blocks(jacobian, index.selectors) if index.small else None
-        radius = partition_spectral_radius(jacobian, index, parts)
+        radius = partition_spectral_radius(jacobian, index, parts, self.algorithm)
         return Observation(q, jacobian, world_T_tip, world_T_sensor, parts, radius, goal, error)
 
     # ------------------------------------------------------------------ acting

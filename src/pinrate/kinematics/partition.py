@@ -179,11 +179,17 @@ class Partition:
         else:
             index = self.resolve(robot)
             n_arm, n_wrist = len(index.arm_columns), len(index.wrist_columns)
+        square = (self.m == n_arm or not (self.m and n_arm)) and (self.k == n_wrist or not (self.k and n_wrist))
+        test = (
+            f"G = U A^-1 B W^-1 is {self.k}x{self.k}, H = B W^-1 U A^-1 is {self.m}x{self.m}"
+            if square
+            else "not square: A^+ and W^+ are pseudo-inverses, and convergence is judged by the error map "
+            "I - J K (the Theorem assumes square blocks)"
+        )
         lines = [
             f"arm ({len(self.arm)} joints, drive linear {self.linear or 'none'} through A): {joints(self.arm)}",
             f"wrist ({len(self.wrist)} joints, drive angular {self.angular or 'none'} through W): {joints(self.wrist)}",
-            f"A is {self.m}x{n_arm}, W is {self.k}x{n_wrist}; "
-            f"G = U A^-1 B W^-1 is {self.k}x{self.k}, H = B W^-1 U A^-1 is {self.m}x{self.m}",
+            f"A is {self.m}x{n_arm}, W is {self.k}x{n_wrist}; {test}",
         ]
         return "\n".join(lines)
 

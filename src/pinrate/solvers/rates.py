@@ -12,6 +12,7 @@ from ..errors import SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex, partition_for, split_blocks
 from . import closed_form, reference
+from .error_map import error_map
 from .registry import REGISTRY, check_algorithm
 
 
@@ -53,14 +54,23 @@ def partition_rates(
     return rates
 
 
-def partition_spectral_radius(J: np.ndarray, index: PartitionIndex, parts: closed_form.Blocks | None = None) -> float:
+def partition_spectral_radius(
+    J: np.ndarray, index: PartitionIndex, parts: closed_form.Blocks | None = None, algorithm: str = "mca1"
+) -> float:
     """ρ of the smaller of G and H (eq. 32, 50) from a sensor-frame Jacobian (6, nv); inf
-    where A or W is singular. Closed form on ``parts`` when given (square blocks <= 3)."""
+    where A or W is singular. Closed form on ``parts`` when given (square blocks <= 3).
+    Where A or W is not square, ρ of the error map of ``algorithm`` (an MCA; MCA1 for the
+    others), :mod:`pinrate.solvers.error_map`."""
     try:
         if parts is not None:
             return closed_form.spectral_radius(parts)
         reduced = J[np.ix_(index.rows, index.columns)]
-        return reference.spectral_radius(*split_blocks(reduced, index.m, index.arm_columns.size))
+        arm = index.arm_columns.size
+        if index.m == arm and reduced.shape[0] - index.m == reduced.shape[1] - arm:
+            return reference.spectral_radius(*split_blocks(reduced, index.m, arm))
+        return error_map(
+            reduced, index.m, arm, algorithm if algorithm in ("mca1", "mca2", "mca3") else "mca1"
+        ).spectral_radius
     except SingularBlockError:
         return math.inf
 

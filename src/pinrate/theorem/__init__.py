@@ -2,7 +2,7 @@
 (:func:`convergence`) and over the work volume (:func:`sample_convergence`,
 :func:`spectral_radius_at`)."""
 
-from .pointwise import Convergence, convergence, convergence_from_blocks
+from .pointwise import Convergence, convergence, convergence_from_blocks, coupling_along
 from .sampling import ConvergenceSample, sample_convergence, spectral_radius_at, wilson_interval
 
 __all__ = [
@@ -10,6 +10,7 @@ __all__ = [
     "ConvergenceSample",
     "convergence",
     "convergence_from_blocks",
+    "coupling_along",
     "sample_convergence",
     "spectral_radius_at",
     "wilson_interval",

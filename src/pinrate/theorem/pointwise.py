@@ -30,6 +30,9 @@ from ..solvers import reference
 from ..solvers.error_map import error_map
 from ..solvers.registry import check_algorithm
 
+MARGINAL = 1e-9
+"""|ρ − 1| up to which the frozen-J test is inconclusive."""
+
 THEOREM_ALGORITHMS = ("mca1", "mca2", "mca3")
 """The algorithms the Theorem is about; for the others ρ says nothing about convergence."""
 
@@ -61,6 +64,14 @@ class Convergence:
     algorithm: str = "mca1"
     theorem_applies: bool = True
     coupling: tuple[float, float] = (0.0, 0.0)
+
+    def verdict(self) -> str:
+        """ "converges" (ρ < 1), "diverges" (ρ > 1) or "inconclusive" (ρ = 1 within
+        :data:`MARGINAL`: some direction is not corrected to first order, typically one the
+        algorithm's blocks cannot produce; the nonlinear terms decide)."""
+        if abs(self.spectral_radius - 1.0) <= MARGINAL:
+            return "inconclusive"
+        return "converges" if self.spectral_radius < 1.0 else "diverges"
 
     def basis(self) -> str:
         """What the verdict rests on, in words."""
@@ -117,3 +128,20 @@ def convergence(robot: Robot, q: object, *, partition: Partition | None = None, 
         return convergence_from_blocks(*partition.blocks(robot, robot.kinematics(q)[0]), algorithm=algorithm)
     except SingularBlockError as error:
         raise error.at(robot.name, q, " (G and H are undefined there)") from None
+
+
+def coupling_along(
+    robot: Robot, configurations: np.ndarray, *, partition: Partition | None = None, algorithm: str = "mca1"
+) -> np.ndarray:
+    """The coupling of ``algorithm``'s error map at each configuration (N,): ‖U A⁻¹‖₂ in rad/m
+    for MCA1 (the term −U A⁻¹ v of eq. 30), ‖B W⁻¹‖₂ in m/rad for MCA2 (eq. 49), 0 for
+    MCA3; inf where A or W is square and singular."""
+    partition = partition_for(robot, partition)
+    which = 1 if algorithm == "mca2" else 0
+    values = []
+    for q in robot.check_configurations(configurations):
+        try:
+            values.append(convergence(robot, q, partition=partition, algorithm=algorithm).coupling[which])
+        except SingularBlockError:
+            values.append(float("inf"))
+    return np.array(values)
