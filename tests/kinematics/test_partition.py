@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -108,3 +110,48 @@ def test_block_shapes_count_velocity_components(tmp_path) -> None:
     partition = pinrate.Partition(("floor", "j1"), (), linear="xyz", angular="")
     assert "A is 3x4, W is 0x0" in partition.describe(robot)
     assert "A is 3x2" in str(partition)  # without the robot: joints, as before
+
+
+PLANAR_BASE = """<?xml version="1.0"?>
+<robot name="planar_base_arm">
+  <link name="world"/><link name="base"/>
+  <joint name="base_planar" type="planar"><parent link="world"/><child link="base"/><axis xyz="0 0 1"/>
+    <limit effort="1" velocity="1" lower="-1" upper="1"/></joint>
+  <link name="l1"/><link name="l2"/><link name="l3"/><link name="tool0"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.3"/>
+    <axis xyz="0 0 1"/><limit effort="1" velocity="1" lower="-2" upper="2"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.4"/>
+    <axis xyz="0 1 0"/><limit effort="1" velocity="1" lower="-2" upper="2"/></joint>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0 0 0.3"/>
+    <axis xyz="0 1 0"/><limit effort="1" velocity="1" lower="-2" upper="2"/></joint>
+  <joint name="tool" type="fixed"><parent link="l3"/><child link="tool0"/><origin xyz="0.1 0 0"/></joint>
+</robot>
+"""
+
+
+def test_a_planar_base_is_left_out_of_the_automatic_partition_and_the_demo_and_analyze_run(tmp_path) -> None:
+    from pinrate.analysis import analyze
+    from pinrate.cli import main
+
+    path = tmp_path / "planar_base_arm.urdf"
+    path.write_text(PLANAR_BASE, encoding="utf-8")
+    robot = pinrate.load(path)
+    partition = pinrate.Partition.auto(robot)
+    assert "base_planar" in robot.joint_names and "base_planar" not in partition.joints
+    assert partition.joints == ("j1", "j2", "j3")
+    assert main(["demo", str(path), "--no-viewer"]) == 0
+    assert analyze(robot, samples=200, points=11, tcp_samples=20).sample.spectral_radius.size == 200
+    # Named in a partition, the base takes part; a region map over it is refused clearly.
+    with_base = pinrate.Partition(["base_planar", "j1"], ["j2", "j3"], linear="xyz", angular="yz")
+    assert with_base.describe(robot).splitlines()[-1].startswith("A is 3x4")
+    with pytest.raises(pinrate.InputError, match="3 DOF"):
+        pinrate.analysis.region_map(robot, joints=["base_planar", "j1"], partition=with_base, points=5)
+
+
+def test_a_partition_naming_a_joint_off_the_tip_chain_is_an_input_error() -> None:
+    robot = pinrate.load(
+        Path(__file__).parent.parent / "data" / "third_party" / "stretch_SE3_eoa_wrist_dw3_tool_sg3.urdf"
+    )
+    partition = pinrate.Partition(["joint_lift", "joint_head_pan", "joint_arm_l0"], ["joint_wrist_yaw"])
+    with pytest.raises(pinrate.InputError, match="'joint_head_pan' is not on the chain"):
+        pinrate.joint_rates(robot, robot.home(), np.zeros(6), partition=partition)

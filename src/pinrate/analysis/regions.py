@@ -50,12 +50,13 @@ def joint_sensitivity(robot: Robot, *, partition: Partition | None = None, rng: 
 
 
 def default_map_joints(robot: Robot, *, partition: Partition | None = None) -> tuple[str, str]:
-    """The two partition joints ρ varies most with (ties: chain order)."""
+    """The two 1-DOF partition joints ρ varies most with (ties: chain order)."""
     partition = partition_for(robot, partition)
-    if len(partition.joints) < 2:
-        raise InputError(f"a region map needs two partition joints; {robot.name!r} has {list(partition.joints)}")
+    candidates = [joint for joint in partition.joints if len(robot.velocity_indices(joint)) == 1]
+    if len(candidates) < 2:
+        raise InputError(f"a region map needs two 1-DOF partition joints; {robot.name!r} has {list(partition.joints)}")
     sensitivity = joint_sensitivity(robot, partition=partition)
-    ranked = sorted(partition.joints, key=lambda j: -sensitivity[j])[:2]
+    ranked = sorted(candidates, key=lambda j: -sensitivity[j])[:2]
     return tuple(sorted(ranked, key=partition.joints.index))  # type: ignore[return-value]
 
 
@@ -76,6 +77,10 @@ def region_map(
     for joint in pair:
         if joint not in partition.joints:
             raise InputError(f"joint {joint!r} is not in the partition; choose from {', '.join(partition.joints)}")
+        if len(robot.velocity_indices(joint)) != 1:
+            raise InputError(
+                f"joint {joint!r} has {len(robot.velocity_indices(joint))} DOF; a region map sweeps 1-DOF joints"
+            )
     base = robot.home() if base is None else robot.check_q(base)
     x = np.linspace(*robot.joint_range(pair[0]), points)
     y = np.linspace(*robot.joint_range(pair[1]), points)

@@ -53,6 +53,29 @@ class Report:
         order = np.argsort(-np.where(np.isfinite(self.sample.spectral_radius), self.sample.spectral_radius, 1e300))
         return [(float(self.sample.spectral_radius[i]), self.sample.q[i]) for i in order[:count]]
 
+    def explain_share(self) -> list[str]:
+        """Why ρ < 1 nowhere, when that is so: which block is singular at every sampled
+        configuration and the rank it has there, or that the error map keeps an eigenvalue 1
+        (a direction never corrected), or that ρ > 1 everywhere."""
+        radii = self.sample.spectral_radius
+        if not radii.size or np.any(radii < 1.0):
+            return []
+        lines = ["**Why ρ < 1 nowhere:**", ""]
+        if np.all(~np.isfinite(radii)):
+            lines += [f"- {line}" for line in singular_blocks(self.robot, self.partition, self.sample.q)]
+        elif np.all(radii == 1.0):
+            lines.append(
+                "- the error map has an eigenvalue 1 at every sampled configuration: some direction is never "
+                "corrected to first order (typically a linear row the arm block cannot produce, the wrist serving "
+                "only the angular rows); the test is inconclusive, and `exact` is the algorithm for this partition"
+            )
+        else:
+            lines.append(
+                f"- ρ > 1 at every finite sample (smallest {np.min(radii):.3g}): MCA1/2/3 diverge in the whole "
+                "work volume for this partition and sensor; use `exact`, or another sensor frame or partition"
+            )
+        return [*lines, ""]
+
     def markdown(self) -> str:
         sample = self.sample
         low, high = sample.interval
@@ -87,9 +110,19 @@ class Report:
             "",
             f"{sample.spectral_radius.size:,} configurations uniform in the joint limits: ρ < 1 on "
             f"**{100 * sample.fraction:.2f} %** (95 % interval {100 * low:.2f} .. {100 * high:.2f} %).",
-            "G (MCA1's matrix) and H (MCA2's) share their non-zero eigenvalues, so the share is the same for",
-            "MCA1, MCA2 and MCA3.",
+            *(
+                (
+                    "G (MCA1's matrix) and H (MCA2's) share their non-zero eigenvalues, so the share is the same for",
+                    "MCA1, MCA2 and MCA3.",
+                )
+                if self.partition.resolve(self.robot).square
+                else (
+                    "A or W is not square, so the Theorem does not apply as stated: ρ is that of MCA1's error map",
+                    "I - J K (pinrate.solvers.error_map), which reduces to ρ(G) for square blocks.",
+                )
+            ),
             "",
+            *self.explain_share(),
             "Worst configurations sampled:",
             "",
             "| ρ | q |",
@@ -128,6 +161,37 @@ class Report:
             else:
                 lines += ["", "No convergence limit inside the range (ρ < 1 everywhere at both ends, or at neither)."]
         return "\n".join(lines) + "\n"
+
+
+SINGULAR_PROBES = 5
+"""Sampled configurations examined to say why a block is singular everywhere."""
+
+
+def singular_blocks(robot: Robot, partition: Partition, configurations: np.ndarray) -> list[str]:
+    """For square blocks A and W singular at every one of the first configurations: the rank
+    each has there, and which joints and rows it relates."""
+    index = partition.resolve(robot)
+    probes = configurations[:SINGULAR_PROBES]
+    jacobians = [robot.jacobian(q)[np.ix_(index.rows, index.columns)] for q in probes]
+    arm = len(index.arm_columns)
+    lines = []
+    for name, rows, columns, joints, axes in (
+        ("A", slice(0, index.m), slice(0, arm), partition.arm, f"linear {partition.linear}"),
+        ("W", slice(index.m, None), slice(arm, None), partition.wrist, f"angular {partition.angular}"),
+    ):
+        blocks = [J[rows, columns] for J in jacobians]
+        size = blocks[0].shape[0]
+        if size == 0 or blocks[0].shape[0] != blocks[0].shape[1]:
+            continue
+        rank = max(int(np.linalg.matrix_rank(block)) for block in blocks)
+        if rank < size:
+            lines.append(
+                f"{name} ({size}x{size}) has rank {rank} at every configuration examined: the joints "
+                f"{', '.join(joints)} produce only {rank} independent {axes} directions at the sensor, so "
+                f"{name}^-1 (eq. 24-25) does not exist; choose other joints or axes (--arm, --wrist, --linear, "
+                "--angular) or the algorithm `exact`"
+            )
+    return lines or ["A or W is numerically singular at every sampled configuration (pinrate's singularity rule)"]
 
 
 def analyze(

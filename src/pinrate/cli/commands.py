@@ -69,11 +69,13 @@ def verdict_lines(robot: Robot, trajectory: Trajectory) -> list[str]:
     algorithm = trajectory.algorithm
     if algorithm not in THEOREM_ALGORITHMS:
         return [
-            f"rho        {radius} along the path: MCA1/2/3's, for reference (the Theorem says nothing of {algorithm})"
+            f"rho        not applicable to {algorithm} (the Theorem is about MCA1/2/3; theirs: {radius} along the path)"
         ]
-    index = trajectory.partition.resolve(robot)
-    square = index.m == index.arm_columns.size and len(index.rows) - index.m == index.wrist_columns.size
-    basis = "the Theorem" if square else f"the error map of {algorithm} (blocks not square)"
+    basis = (
+        "the Theorem"
+        if trajectory.partition.resolve(robot).square
+        else f"the error map of {algorithm} (blocks not square)"
+    )
     lines = [f"rho        {radius} along the path ({basis}: < 1 at a point means converging there, J frozen)"]
     if algorithm == "mca3":
         return lines

@@ -68,6 +68,7 @@ class PartitionIndex:
     all_columns: bool = field(init=False)  # the columns are 0 .. nv-1 in order
     all_rows: bool = field(init=False)  # the rows are 0 .. 5 in order
     small: bool = field(init=False)  # square blocks of size <= 3: closed-form kernels apply
+    square: bool = field(init=False)  # A and W square, as the Theorem assumes (else the error map)
     selectors: tuple[Selector, ...] = field(init=False)  # A, B, U, W in J
 
     def __post_init__(self) -> None:
@@ -78,6 +79,7 @@ class PartitionIndex:
         arm, wrist = self.arm_columns.tolist(), self.wrist_columns.tolist()
         set_(self, "selectors", tuple(selector(r, c) for r in (linear, angular) for c in (arm, wrist)))
         set_(self, "small", square_and_small(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
+        set_(self, "square", self.m == self.arm_columns.size and self.k == self.wrist_columns.size)
         set_(self, "all_columns", columns.tolist() == list(range(self.nv)))
         set_(self, "all_rows", self.rows.tolist() == list(range(6)))
 
@@ -133,10 +135,23 @@ class Partition:
         return [_AXES.index(a) for a in self.linear] + [3 + _AXES.index(a) for a in self.angular]
 
     def resolve(self, robot: Robot) -> PartitionIndex:
-        """Row and column indices of this partition in ``robot``'s Jacobian (cached per robot)."""
+        """Row and column indices of this partition in ``robot``'s Jacobian (cached per robot).
+
+        Raises:
+            InputError: a joint the robot does not have, or one off the chain from the base to
+                the tip (it cannot move the tip: its column of J is zero).
+        """
         cache = _INDEX_CACHE.setdefault(check_robot(robot), {})
         index = cache.get(self)
         if index is None:
+            chain = robot.tip_chain()
+            for joint in self.joints:
+                robot.joint_id(joint)  # an unknown name: InputError with the closest names
+                if joint not in chain:
+                    raise InputError(
+                        f"joint {joint!r} is not on the chain from the base to the tip {robot.tip!r} of robot "
+                        f"{robot.name!r}: it cannot move the tip. The chain's joints: {', '.join(chain)}"
+                    )
             arm_columns = [c for joint in self.arm for c in robot.velocity_indices(joint)]
             wrist_columns = [c for joint in self.wrist for c in robot.velocity_indices(joint)]
             index = PartitionIndex(
@@ -179,7 +194,7 @@ class Partition:
         else:
             index = self.resolve(robot)
             n_arm, n_wrist = len(index.arm_columns), len(index.wrist_columns)
-        square = (self.m == n_arm or not (self.m and n_arm)) and (self.k == n_wrist or not (self.k and n_wrist))
+        square = self.m == n_arm and self.k == n_wrist
         test = (
             f"G = U A^-1 B W^-1 is {self.k}x{self.k}, H = B W^-1 U A^-1 is {self.m}x{self.m}"
             if square
@@ -198,7 +213,9 @@ class Partition:
         """The default partition of ``robot`` (cached on the robot).
 
         Only joints of the tip's chain whose Jacobian column is non-zero somewhere take part,
-        less the gripper and hand joints (mimic, mimicked, zero-range; :attr:`Robot.hand_joints`);
+        less the gripper and hand joints (mimic, mimicked, zero-range; :attr:`Robot.hand_joints`)
+        and less multi-DOF joints (a ``planar`` or ``floating`` base: the paper's arm and wrist
+        are the manipulator's 1-DOF joints; a :class:`Partition` naming one includes it);
         twist components whose rows are zero at every sampled configuration are dropped.
         With n joints, m linear and k angular components, the wrist is the last
         min(k, max(n - m, 0)) joints and the arm the ones before them.
@@ -215,7 +232,9 @@ class Partition:
         joints = [
             j
             for j in robot.tip_chain()
-            if j not in robot.hand_joints and any(moving[:, c].any() for c in robot.velocity_indices(j))
+            if j not in robot.hand_joints
+            and len(robot.velocity_indices(j)) == 1
+            and any(moving[:, c].any() for c in robot.velocity_indices(j))
         ]
         columns = [c for j in joints for c in robot.velocity_indices(j)]
         active_rows = moving[:, columns].any(axis=1) if columns else np.zeros(6, dtype=bool)

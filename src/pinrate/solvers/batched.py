@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import SingularBlockError
 from . import eigen
+from .error_map import error_map
 from .singular import PINV_RCOND, invertible
 
 
@@ -76,7 +78,26 @@ def matrix_spectral_radius(M: np.ndarray) -> np.ndarray:
 
 def spectral_radius(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> np.ndarray:
     """ρ of the smaller of G = U A^-1 B W^-1 and H = B W^-1 U A^-1 (eq. 32, 50) for stacks of
-    blocks (N, ., .); inf where A or W is singular."""
+    blocks (N, ., .); inf where A or W is singular.
+
+    Where A is tall or W wide, pseudo-inverses no longer give the error map's spectrum
+    (A A^+ or W^+ W is not the identity), so each configuration gets ρ of MCA1's error map
+    (:mod:`pinrate.solvers.error_map`; a loop, not batched: user partitions only). A wide A or a
+    tall W of full rank (a 7-DOF arm, a 5-DOF arm) keeps the batched G, which equals it.
+    """
+    if A.shape[1] > A.shape[2] or W.shape[2] > W.shape[1]:
+        m, arm = A.shape[1], A.shape[2]
+        radii = []
+        for blocks in zip(A, B, U, W, strict=True):
+            try:
+                radii.append(
+                    error_map(
+                        np.block([[blocks[0], blocks[1]], [blocks[2], blocks[3]]]), m, arm, "mca1"
+                    ).spectral_radius
+                )
+            except SingularBlockError:
+                radii.append(np.inf)
+        return np.array(radii)
     A_inv, singular_A = inverse(A)
     W_inv, singular_W = inverse(W)
     P = U @ A_inv

@@ -43,6 +43,10 @@ import numpy as np
 from ..kinematics.partition import split_blocks
 from .registry import REGISTRY
 
+MARGINAL = 1e-9
+"""|ρ − 1| up to which ρ is reported as exactly 1: an eigenvalue 1 is structural (a direction
+the algorithm's blocks never correct), and rounding must not turn it into "converges"."""
+
 
 @dataclass(frozen=True)
 class ErrorMap:
@@ -99,6 +103,8 @@ def error_map(jacobian: np.ndarray, m: int, arm_columns: int, algorithm: str) ->
     matrix, space = (task, "task") if rows <= columns else (np.eye(columns) - inverse @ jacobian, "joint")
     eigenvalues = np.linalg.eigvals(matrix) if matrix.size else np.zeros(0, dtype=complex)
     radius = float(np.abs(eigenvalues).max()) if eigenvalues.size else 0.0
+    if abs(radius - 1.0) <= MARGINAL:
+        radius = 1.0
     coupling = (_norm(task[m:, :m]), _norm(task[:m, m:]))
     return ErrorMap(matrix=matrix, space=space, eigenvalues=eigenvalues, spectral_radius=radius, coupling=coupling)
 

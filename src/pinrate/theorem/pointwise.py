@@ -27,11 +27,8 @@ from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
 from ..solvers import reference
-from ..solvers.error_map import error_map
+from ..solvers.error_map import MARGINAL, error_map
 from ..solvers.registry import check_algorithm
-
-MARGINAL = 1e-9
-"""|ρ − 1| up to which the frozen-J test is inconclusive."""
 
 THEOREM_ALGORITHMS = ("mca1", "mca2", "mca3")
 """The algorithms the Theorem is about; for the others ρ says nothing about convergence."""
@@ -102,7 +99,8 @@ def convergence_from_blocks(
     mapped = error_map(np.block([[A, B], [U, W]]), A.shape[0], A.shape[1], algorithm)
     square = A.shape[0] == A.shape[1] and W.shape[0] == W.shape[1]
     eigenvalues = reference.smaller_eigenvalues(G, H) if square else mapped.eigenvalues
-    radius = float(np.max(np.abs(eigenvalues))) if eigenvalues.size else 0.0
+    largest = float(np.max(np.abs(eigenvalues))) if eigenvalues.size else 0.0
+    radius = largest if square else mapped.spectral_radius
     return Convergence(
         G=G,
         H=H,
