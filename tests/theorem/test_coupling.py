@@ -34,4 +34,3 @@ def test_mca1_diverges_with_rho_below_one_and_the_coupling_says_why() -> None:
     lines = verdict_lines(robot, trajectory)
     assert any(line.startswith("coupling   |U A^-1|") for line in lines)
     assert any(line.startswith("why        diverged although rho < 1") for line in lines), lines
-
