@@ -99,3 +99,18 @@ def test_an_over_determined_arm_gets_an_honest_verdict() -> None:
     # A square partition of the same robot keeps the Theorem's verdict.
     square = pinrate.convergence(robot, q)
     assert square.theorem_applies and square.verdict() == ("converges" if square.spectral_radius < 1 else "diverges")
+
+
+def test_a_wide_A_or_a_tall_W_of_full_rank_keeps_the_pseudo_inverse_G() -> None:
+    # panda: A 3x4; so100: W 3x2. The servo and the work-volume share take the cheap G there.
+    for name in ("panda", "so100"):
+        robot = pinrate.load(name)
+        partition = pinrate.Partition.auto(robot)
+        columns = [c for joint in partition.joints for c in robot.velocity_indices(joint)]
+        arm = len(partition.arm)
+        for seed in range(5):
+            jacobian = robot.jacobian(robot.random_configuration(seed))[:, columns]
+            A, B, U, W = jacobian[:3, :arm], jacobian[:3, arm:], jacobian[3:, :arm], jacobian[3:, arm:]
+            G = U @ np.linalg.pinv(A) @ B @ np.linalg.pinv(W)
+            mapped = error_map(jacobian, 3, arm, "mca1")
+            assert mapped.spectral_radius == pytest.approx(np.abs(np.linalg.eigvals(G)).max(), rel=1e-8, abs=1e-12)

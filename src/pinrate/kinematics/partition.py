@@ -69,6 +69,9 @@ class PartitionIndex:
     all_rows: bool = field(init=False)  # the rows are 0 .. 5 in order
     small: bool = field(init=False)  # square blocks of size <= 3: closed-form kernels apply
     square: bool = field(init=False)  # A and W square, as the Theorem assumes (else the error map)
+    # A not tall and W not wide: of full rank, their pseudo-inverse G has the error map's
+    # spectrum (A A^+ = I, W^+ W = I; pinrate.solvers.error_map), so the cheap G is exact.
+    pseudo_g: bool = field(init=False)
     selectors: tuple[Selector, ...] = field(init=False)  # A, B, U, W in J
 
     def __post_init__(self) -> None:
@@ -80,6 +83,7 @@ class PartitionIndex:
         set_(self, "selectors", tuple(selector(r, c) for r in (linear, angular) for c in (arm, wrist)))
         set_(self, "small", square_and_small(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
         set_(self, "square", self.m == self.arm_columns.size and self.k == self.wrist_columns.size)
+        set_(self, "pseudo_g", self.m <= self.arm_columns.size and self.k >= self.wrist_columns.size)
         set_(self, "all_columns", columns.tolist() == list(range(self.nv)))
         set_(self, "all_rows", self.rows.tolist() == list(range(6)))
 

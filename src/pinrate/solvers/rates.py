@@ -59,8 +59,9 @@ def partition_spectral_radius(
 ) -> float:
     """ρ of the smaller of G and H (eq. 32, 50) from a sensor-frame Jacobian (6, nv); inf
     where A or W is singular. Closed form on ``parts`` when given (square blocks <= 3).
-    Where A or W is not square, ρ of the error map of ``algorithm`` (an MCA; MCA1 for the
-    others), :mod:`pinrate.solvers.error_map`."""
+    Where A is tall or W wide, ρ of the error map of ``algorithm`` (an MCA; MCA1 for the
+    others), :mod:`pinrate.solvers.error_map`; a wide A or a tall W keeps the pseudo-inverse G,
+    whose spectrum is the map's."""
     try:
         if parts is not None:
             return closed_form.spectral_radius(parts)
