@@ -67,11 +67,10 @@ def partition_spectral_radius(
             return closed_form.spectral_radius(parts)
         reduced = J[np.ix_(index.rows, index.columns)]
         arm = index.arm_columns.size
-        if index.m == arm and reduced.shape[0] - index.m == reduced.shape[1] - arm:
+        if index.pseudo_g:
             return reference.spectral_radius(*split_blocks(reduced, index.m, arm))
-        return error_map(
-            reduced, index.m, arm, algorithm if algorithm in ("mca1", "mca2", "mca3") else "mca1"
-        ).spectral_radius
+        mca = algorithm if algorithm in ("mca1", "mca2", "mca3") else "mca1"
+        return error_map(reduced, index.m, arm, mca).spectral_radius
     except SingularBlockError:
         return math.inf
 
