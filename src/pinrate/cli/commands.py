@@ -93,6 +93,7 @@ def verdict_lines(robot: Robot, trajectory: Trajectory) -> list[str]:
     if (
         trajectory.reason.startswith("diverging")
         and np.all(radii[np.isfinite(radii)] < 1)
+        and finite[0] > 0
         and finite.max() >= COUPLING_GROWTH * finite[0]
     ):
         lines.append(
