@@ -40,3 +40,11 @@ def fuzz_count(base: int) -> int:
     import os
 
     return base * max(1, int(os.environ.get("PINRATE_FUZZ_SCALE", "1")))
+
+
+def partition_rows_and_columns(robot: pinrate.Robot, partition: pinrate.Partition) -> tuple[list[int], list[int]]:
+    """Rows (twist components, linear then angular) and columns (joints, arm then wrist) of
+    a partition in J (6, nv), written here from the contract rather than taken from pinrate."""
+    rows = ["xyz".index(a) for a in partition.linear] + [3 + "xyz".index(a) for a in partition.angular]
+    columns = [c for joint in partition.joints for c in robot.velocity_indices(joint)]
+    return rows, columns

@@ -21,6 +21,7 @@ import pytest
 import pinrate
 from pinrate.cli import main
 from pinrate.robots import example_robot_data_share
+from support import partition_rows_and_columns
 
 THIRD_PARTY = Path(__file__).parent.parent / "data" / "third_party"
 SHARE = example_robot_data_share()
@@ -87,9 +88,7 @@ def generic_rank(matrix_at: object, samples: np.ndarray) -> int:
 
 
 def partition_jacobian(robot: pinrate.Robot, partition: pinrate.Partition, q: np.ndarray) -> np.ndarray:
-    columns = [c for joint in partition.joints for c in robot.velocity_indices(joint)]
-    rows = ["xyz".index(a) for a in partition.linear] + [3 + "xyz".index(a) for a in partition.angular]
-    return robot.jacobian(q)[np.ix_(rows, columns)]
+    return robot.jacobian(q)[np.ix_(*partition_rows_and_columns(robot, partition))]
 
 
 @pytest.mark.parametrize(

@@ -11,6 +11,7 @@ import pytest
 import pinrate
 from pinrate.kinematics.home import WELL_CONDITIONED
 from pinrate.robots import example_robot_data_share
+from support import partition_rows_and_columns
 
 SHARE = example_robot_data_share()
 FILES = [
@@ -28,9 +29,7 @@ def smallest_singular_values(robot: pinrate.Robot, q: np.ndarray) -> list[float]
     """σ_min of the partition's J and of its square blocks, from numpy's SVD (independent of
     pinrate.kinematics.home)."""
     partition = pinrate.Partition.auto(robot)
-    columns = [c for joint in partition.joints for c in robot.velocity_indices(joint)]
-    rows = ["xyz".index(a) for a in partition.linear] + [3 + "xyz".index(a) for a in partition.angular]
-    jacobian = robot.jacobian(q)[np.ix_(rows, columns)]
+    jacobian = robot.jacobian(q)[np.ix_(*partition_rows_and_columns(robot, partition))]
     arm = sum(len(robot.velocity_indices(joint)) for joint in partition.arm)
     blocks = (jacobian[: partition.m, :arm], jacobian[partition.m :, arm:])
     square = [block for block in blocks if block.size and block.shape[0] == block.shape[1]]

@@ -10,6 +10,7 @@ import pytest
 
 import pinrate
 from pinrate.solvers.error_map import error_map
+from support import partition_rows_and_columns
 
 MCAS = ("mca1", "mca2", "mca3")
 
@@ -49,7 +50,7 @@ def servo_cycle(robot: pinrate.Robot, q: np.ndarray, target: np.ndarray, algorit
     world_T_tip = robot.pose(q)
     rotation, position = world_T_tip[:3, :3], world_T_tip[:3, 3]
     error = np.concatenate([rotation.T @ (target[:3, 3] - position), pin.log3(rotation.T @ target[:3, :3])])
-    rows = ["xyz".index(a) for a in partition.linear] + [3 + "xyz".index(a) for a in partition.angular]
+    rows, _ = partition_rows_and_columns(robot, partition)
     rates = pinrate.joint_rates(robot, q, error[rows], algorithm=algorithm, partition=partition)
     return robot.integrate(q, rates, 1.0)
 
@@ -65,7 +66,7 @@ def test_the_map_is_the_linearised_servo_cycle_for_any_shapes(case: str, algorit
     name = case.split()[0]
     robot = pinrate.load(name)
     partition = UR5_TALL_ARM if name == "ur5" else pinrate.Partition.auto(robot)
-    columns = [c for joint in partition.joints for c in robot.velocity_indices(joint)]
+    rows, columns = partition_rows_and_columns(robot, partition)
     for seed in range(3):
         q_star = robot.random_configuration(seed + 3)
         target = robot.pose(q_star)
@@ -78,7 +79,6 @@ def test_the_map_is_the_linearised_servo_cycle_for_any_shapes(case: str, algorit
             behind = servo_cycle(robot, robot.integrate(q_star, -offset, 1.0), target, algorithm, partition)
             derivative[:, j] = (ahead - behind) / (2 * step)
         cycle = np.sort(np.abs(np.linalg.eigvals(derivative[np.ix_(columns, columns)])))
-        rows = ["xyz".index(a) for a in partition.linear] + [3 + "xyz".index(a) for a in partition.angular]
         jacobian = robot.jacobian(q_star)[np.ix_(rows, columns)]
         mapped = error_map(jacobian, partition.m, len(partition.arm), algorithm)
         np.testing.assert_allclose(np.sort(np.abs(mapped.eigenvalues)), cycle, atol=1e-5)
