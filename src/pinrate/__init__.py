@@ -20,6 +20,7 @@ __version__ = "0.2.0.dev0"
 # Public name -> the subpackage that defines it.
 _SOURCES = {
     "ALGORITHMS": "solvers",
+    "Controller": "control",
     "Convergence": "theorem",
     "ConvergenceSample": "theorem",
     "FrameError": "errors",
@@ -29,6 +30,8 @@ _SOURCES = {
     "PinrateError": "errors",
     "Robot": "kinematics",
     "SingularBlockError": "errors",
+    "Status": "control",
+    "Step": "control",
     "Trajectory": "control",
     "convergence": "theorem",
     "joint_rates": "solvers",
@@ -39,6 +42,7 @@ _SOURCES = {
 
 __all__ = [
     "ALGORITHMS",
+    "Controller",
     "Convergence",
     "ConvergenceSample",
     "FrameError",
@@ -48,6 +52,8 @@ __all__ = [
     "PinrateError",
     "Robot",
     "SingularBlockError",
+    "Status",
+    "Step",
     "Trajectory",
     "__version__",
     "convergence",
@@ -60,7 +66,7 @@ __all__ = [
 
 if TYPE_CHECKING:
     from . import robots
-    from .control import Trajectory, servo
+    from .control import Controller, Status, Step, Trajectory, servo
     from .errors import FrameError, InputError, LoadError, PinrateError, SingularBlockError
     from .kinematics import Partition, Robot
     from .robots import load

@@ -10,8 +10,16 @@ Each step at configuration q (Shoham & Koren §2, Fig. 3):
 3. the linear and the angular parts are each scaled down, direction kept, to at most
    ``max_linear_speed`` and ``max_angular_speed``;
 4. the algorithm turns the twist into joint rates (:mod:`pinrate.solvers`);
-5. q is integrated over dt on the configuration space (``pin.integrate``) and clamped to
-   the partition joints' position limits.
+5. position limits: a joint whose commanded rate would carry it past a limit within dt is
+   *blocked*: the rates are solved again without it (the others serve the command as well as
+   they can), and it moves at most onto the limit. A joint on its limit whose command points
+   away is not blocked: motion away is always executed. The test is on the commanded rate,
+   never on a measured one, so a joint held at a limit does not cycle between stop and go
+   (MoveIt Servo issue #2898);
+6. velocity limits: when a rate exceeds its joint's limit, every rate is scaled by the same
+   factor, the largest that meets every limit, so the direction of motion is kept;
+7. q is integrated over dt on the configuration space (``pin.integrate``) and clamped to
+   the limits (a guard against rounding: step 5 already keeps q inside).
 
 :meth:`Controller.step` returns a :class:`Step`: the next q, the rates applied, and a
 :class:`~pinrate.control.status.Status` saying what limited the step.
@@ -33,7 +41,7 @@ from ..kinematics.spatial import pose_error, saturate
 from ..solvers import closed_form
 from ..solvers.rates import partition_rates, partition_spectral_radius
 from ..solvers.registry import check_algorithm
-from .status import Status
+from .status import Status, most_severe
 
 MAX_LINEAR_SPEED = 0.5
 """Default speed limit of the commanded TCP velocity (m/s)."""
@@ -109,8 +117,24 @@ class Step:
 class _Limit:
     joint: str
     index: int  # into q
+    velocity: int  # into v
     lower: float
     upper: float
+
+    def passed_by(self, q: np.ndarray, rates: np.ndarray, dt: float) -> bool:
+        """Whether the commanded rate carries the joint past a limit within dt."""
+        value = q[self.index] + rates[self.velocity] * dt
+        return value > self.upper or value < self.lower
+
+    def onto_the_limit(self, q: np.ndarray, rate: float, dt: float) -> float:
+        """The rate, cut so that the joint ends the step on its limit at most."""
+        value = q[self.index]
+        return min(max(rate, (self.lower - value) / dt), (self.upper - value) / dt)
+
+
+VELOCITY_LIMIT_UNLIMITED = 1e6
+"""A URDF velocity limit of 0 (what converters write for "unknown") or above this (rad/s or
+m/s) means no limit."""
 
 
 class Controller:
@@ -123,9 +147,14 @@ class Controller:
         dt: control period in seconds.
         max_linear_speed, max_angular_speed: saturation of the commanded twist (m/s, rad/s;
             inf for none).
+        velocity_limits: None for the URDF's ``<limit velocity>`` of each joint (none where it
+            gives 0 or none), a number for every joint, or one per velocity component (nv,),
+            in rad/s or m/s; inf for none. When one binds, all rates are scaled alike.
+        position_limits: keep q within the joints' position limits (see the module docstring).
 
     Raises:
-        InputError: an unknown algorithm, a bad partition, a dt or speed that is not positive.
+        InputError: an unknown algorithm, a bad partition, a dt or speed that is not positive,
+            velocity limits that are not positive or of the wrong length.
     """
 
     def __init__(
@@ -137,6 +166,8 @@ class Controller:
         dt: float = 0.01,
         max_linear_speed: float = MAX_LINEAR_SPEED,
         max_angular_speed: float = MAX_ANGULAR_SPEED,
+        velocity_limits: object = None,
+        position_limits: bool = True,
     ) -> None:
         self.robot = robot
         self.algorithm = check_algorithm(algorithm)
@@ -145,7 +176,12 @@ class Controller:
         self.dt = check_positive(dt, "dt")
         self.max_linear_speed = check_positive(max_linear_speed, "max_linear_speed", allow_inf=True)
         self.max_angular_speed = check_positive(max_angular_speed, "max_angular_speed", allow_inf=True)
+        if not isinstance(position_limits, bool):
+            raise InputError(f"position_limits must be True or False, not {position_limits!r}")
+        self.position_limits = position_limits
         self._limits = self._position_limits()
+        self.velocity_limits = self._velocity_limits(velocity_limits)
+        self._rate_limited = np.isfinite(self.velocity_limits)
 
     def _position_limits(self) -> list[_Limit]:
         """The partition's 1-DOF joints with finite position limits."""
@@ -153,8 +189,30 @@ class Controller:
         for joint in self.partition.joints:
             bounds = self.robot.joint_limits(joint)
             if bounds is not None:
-                limits.append(_Limit(joint, self.robot.model.joints[self.robot.joint_id(joint)].idx_q, *bounds))
+                model = self.robot.model.joints[self.robot.joint_id(joint)]
+                limits.append(_Limit(joint, model.idx_q, model.idx_v, *bounds))
         return limits
+
+    def _velocity_limits(self, limits: object) -> np.ndarray:
+        """Per velocity component (nv,), inf where there is none."""
+        if limits is None:
+            urdf = np.array(self.robot.model.velocityLimit, dtype=float)
+            return np.where((urdf > 0) & (urdf < VELOCITY_LIMIT_UNLIMITED), urdf, np.inf)
+        if np.ndim(limits) == 0:
+            value = check_positive(limits, "velocity_limits", allow_inf=True)
+            return np.full(self.robot.nv, value)
+        try:
+            values = np.array(limits, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"velocity_limits must be numbers, not {type(limits).__name__}") from None
+        if values.shape != (self.robot.nv,):
+            raise InputError(
+                f"velocity_limits must be one number or {self.robot.nv} (one per velocity component of "
+                f"{self.robot.name!r}), got shape {values.shape}"
+            )
+        if np.isnan(values).any() or (values <= 0).any():
+            raise InputError(f"velocity_limits must be positive (inf for none), got {values}")
+        return values
 
     # ------------------------------------------------------------------ seeing
     def observe(self, q: object, goal: PoseGoal | None = None) -> Observation:
@@ -200,8 +258,10 @@ class Controller:
                 measures its stop rules on it): it is reused, not recomputed.
 
         A singular square block halts the step (``Status.HALT_FOR_SINGULARITY``, q kept,
-        rates 0); a joint pushed past a position limit is clamped there
-        (``Status.JOINT_LIMIT``). Never raises for what the robot does.
+        rates 0); joints that the command would carry past a position limit are held at it
+        while the others serve the command (``Status.JOINT_LIMIT``, ``frozen``); rates over
+        a velocity limit are all scaled alike (``Status.RATE_LIMITED``). Never raises for
+        what the robot does.
         """
         if observation is None:
             observation = self.observe(q)
@@ -211,20 +271,70 @@ class Controller:
         try:
             rates = partition_rates(observation.jacobian, self.index, twist, self.algorithm, observation.blocks)
         except SingularBlockError as singular:
-            return Step(
-                observation.q,
-                np.zeros(self.robot.nv),
-                Status.HALT_FOR_SINGULARITY,
-                (),
-                twist,
-                observation,
-                str(singular),
-            )
+            return self._halt(observation, twist, str(singular))
+        statuses, details, frozen = [Status.TWIST_SATURATED] if saturated else [], [], ()
+        if self.position_limits and self._limits:
+            try:
+                rates, frozen = self._respect_position_limits(observation, twist, rates)
+            except SingularBlockError as singular:
+                return self._halt(observation, twist, f"{singular}, with the joints at their limits left out")
+            if frozen:
+                statuses.append(Status.JOINT_LIMIT)
+                details.append(f"held at a position limit: {', '.join(frozen)}")
+        scale = self._rate_scale(rates)
+        if scale < 1.0:
+            rates = rates * scale
+            statuses.append(Status.RATE_LIMITED)
+            details.append(f"rates scaled by {scale:.3g} to meet the velocity limits")
         next_q = self.robot.integrate(observation.q, rates, self.dt)
-        hit = self._clamp(next_q)
-        if hit:
-            return Step(next_q, rates, Status.JOINT_LIMIT, (), twist, observation, hit)
-        return Step(next_q, rates, Status.TWIST_SATURATED if saturated else Status.OK, (), twist, observation)
+        if self.position_limits:
+            hit = self._clamp(next_q)
+            if hit and not frozen:
+                statuses.append(Status.JOINT_LIMIT)
+                details.append(hit)
+        return Step(next_q, rates, most_severe(*statuses), frozen, twist, observation, "; ".join(details))
+
+    def _halt(self, observation: Observation, twist: np.ndarray, detail: str) -> Step:
+        return Step(observation.q, np.zeros(self.robot.nv), Status.HALT_FOR_SINGULARITY, (), twist, observation, detail)
+
+    def _respect_position_limits(
+        self, observation: Observation, twist: np.ndarray, rates: np.ndarray
+    ) -> tuple[np.ndarray, tuple[str, ...]]:
+        """(rates, blocked joints): joints whose commanded rate would pass a limit are left
+        out and the rates solved again, until no remaining joint passes one; each blocked
+        joint goes on at its commanded rate up to its limit, and stops there."""
+        q = observation.q
+        blocked: dict[_Limit, float] = {}  # each blocked joint's rate when it was blocked
+        while True:
+            passing = [limit for limit in self._limits if limit not in blocked and limit.passed_by(q, rates, self.dt)]
+            if not passing:
+                break
+            blocked.update((limit, float(rates[limit.velocity])) for limit in passing)
+            rates = self._solve_without(observation, twist, {limit.joint for limit in blocked})
+        for limit, commanded in blocked.items():
+            rates[limit.velocity] = limit.onto_the_limit(q, commanded, self.dt)
+        return rates, tuple(limit.joint for limit in blocked)
+
+    def _solve_without(self, observation: Observation, twist: np.ndarray, left_out: set[str]) -> np.ndarray:
+        """The algorithm's rates with the ``left_out`` joints removed from the partition (they
+        get rate 0 here). Raises SingularBlockError as the algorithm does."""
+        partition = self.partition
+        reduced = Partition(
+            [joint for joint in partition.arm if joint not in left_out],
+            [joint for joint in partition.wrist if joint not in left_out],
+            linear=partition.linear,
+            angular=partition.angular,
+        )
+        return partition_rates(observation.jacobian, reduced.resolve(self.robot), twist, self.algorithm)
+
+    def _rate_scale(self, rates: np.ndarray) -> float:
+        """The largest factor <= 1 that brings every rate within its velocity limit."""
+        if not self._rate_limited.any():
+            return 1.0
+        magnitudes = np.abs(rates[self._rate_limited])
+        limits = self.velocity_limits[self._rate_limited]
+        over = magnitudes > limits
+        return float(np.min(limits[over] / magnitudes[over])) if over.any() else 1.0
 
     def _clamp(self, q: np.ndarray) -> str:
         """Clamp q in place to the limits; describe the first joint that was past one ('' if none)."""

@@ -30,7 +30,10 @@ norms ``tol`` applies to):
   gives), or for STALL_MAX_STEPS steps, whichever is fewer. Every continuing window improves
   e by 1 %, and e cannot fall below ``tol`` without converging, so a run ends after at most
   ln(e0 / tol) / ln(1 / 0.99) windows whatever ``max_steps`` is.
-- **joint limit**, **singular**: from the step (:class:`~.status.Status`).
+- **singular**: the step halted at a singular square block (:class:`~.status.Status`).
+
+A joint limit does not stop the run: the step holds the joint on its limit while the others
+go on serving the error (a target the held joint was needed for then ends as "stalled").
 - **max steps**: ``max_steps`` ran out.
 """
 
@@ -62,6 +65,13 @@ STALL_MAX_STEPS = 100_000
 than this to fall 1 % is not progressing at a useful rate (and a tiny dt would otherwise
 make the window, and the run, endless in wall-clock time)."""
 
+_STEP_WORDS = {
+    Status.TWIST_SATURATED: "saturated",
+    Status.JOINT_LIMIT: "joint limit",
+    Status.RATE_LIMITED: "rate limited",
+}
+"""The word a step's status leaves in ``Trajectory.status`` ("moving" for the others)."""
+
 MIN_TOL = 1e-12
 """Smallest ``tol`` (m and rad): finer than double precision resolves a pose of a 1 m arm."""
 
@@ -80,6 +90,7 @@ def servo(
     max_linear_speed: float = MAX_LINEAR_SPEED,
     max_angular_speed: float = MAX_ANGULAR_SPEED,
     stall_time: float | None = None,
+    velocity_limits: object = math.inf,
 ) -> Trajectory:
     """Servo the tip from q0 to ``target`` (4x4 pose in the world, or pinocchio.SE3).
 
@@ -87,8 +98,10 @@ def servo(
     both below ``tol`` (converged), or with a reason (see the module's stop rules): the error
     grew past DIVERGENCE_FACTOR times its best (diverging), it has not improved by
     STALL_IMPROVEMENT for ``stall_time`` seconds (stalled; default max(1 s, 5 / gain)), a
-    partition joint reached a position limit (q is clamped there), a square block became
-    singular, or ``max_steps`` ran out.
+    square block became singular, or ``max_steps`` ran out. Joints are held at their position
+    limits while the others go on (:class:`Controller`). ``velocity_limits`` as for
+    :class:`Controller`: the default, none, keeps the papers' simulations as they were; None
+    takes the URDF's.
     """
     controller = Controller(
         robot,
@@ -97,6 +110,7 @@ def servo(
         dt=dt,
         max_linear_speed=max_linear_speed,
         max_angular_speed=max_angular_speed,
+        velocity_limits=velocity_limits,
     )
     q = robot.check_q(q0)
     goal = PoseGoal.of(target, gain)
@@ -151,14 +165,10 @@ def servo(
         if step.status is Status.HALT_FOR_SINGULARITY:
             final, reason = "singular", f"singular: {step.detail} at step {step_number}"
             break
-        status.append("saturated" if step.status is Status.TWIST_SATURATED else "moving")
+        status.append(_STEP_WORDS.get(step.status, "moving"))
         q = step.q
         rates_log.append(step.joint_rates)
         configurations.append(q)
-        if step.status is Status.JOINT_LIMIT:
-            record(q)  # q[-1] sits on the limit: its errors complete every per-q array
-            final, reason = "joint limit", f"joint limit: {step.detail} at step {step_number + 1}"
-            break
     status.append(final)
     return Trajectory(
         q=np.array(configurations),
