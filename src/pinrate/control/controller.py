@@ -180,8 +180,13 @@ class Controller:
             raise InputError(f"position_limits must be True or False, not {position_limits!r}")
         self.position_limits = position_limits
         self._limits = self._position_limits()
+        # The same limits as plain tuples: the test each step makes runs on Python floats
+        # (numpy's per-call overhead exceeds the arithmetic for a handful of joints).
+        self._limit_rows = [(limit.index, limit.velocity, limit.lower, limit.upper) for limit in self._limits]
         self.velocity_limits = self._velocity_limits(velocity_limits)
-        self._rate_limited = np.isfinite(self.velocity_limits)
+        self._rate_limit_rows = [
+            (velocity, float(limit)) for velocity, limit in enumerate(self.velocity_limits) if math.isfinite(limit)
+        ]
 
     def _position_limits(self) -> list[_Limit]:
         """The partition's 1-DOF joints with finite position limits."""
@@ -273,7 +278,7 @@ class Controller:
         except SingularBlockError as singular:
             return self._halt(observation, twist, str(singular))
         statuses, details, frozen = [Status.TWIST_SATURATED] if saturated else [], [], ()
-        if self.position_limits and self._limits:
+        if self.position_limits and self._limits and self._passes_a_limit(observation.q, rates):
             try:
                 rates, frozen = self._respect_position_limits(observation, twist, rates)
             except SingularBlockError as singular:
@@ -296,6 +301,15 @@ class Controller:
 
     def _halt(self, observation: Observation, twist: np.ndarray, detail: str) -> Step:
         return Step(observation.q, np.zeros(self.robot.nv), Status.HALT_FOR_SINGULARITY, (), twist, observation, detail)
+
+    def _passes_a_limit(self, q: np.ndarray, rates: np.ndarray) -> bool:
+        """Whether any commanded rate carries its joint past a limit within dt."""
+        q_values, rate_values, dt = q.tolist(), rates.tolist(), self.dt
+        for index, velocity, lower, upper in self._limit_rows:
+            value = q_values[index] + rate_values[velocity] * dt
+            if value > upper or value < lower:
+                return True
+        return False
 
     def _respect_position_limits(
         self, observation: Observation, twist: np.ndarray, rates: np.ndarray
@@ -329,12 +343,13 @@ class Controller:
 
     def _rate_scale(self, rates: np.ndarray) -> float:
         """The largest factor <= 1 that brings every rate within its velocity limit."""
-        if not self._rate_limited.any():
-            return 1.0
-        magnitudes = np.abs(rates[self._rate_limited])
-        limits = self.velocity_limits[self._rate_limited]
-        over = magnitudes > limits
-        return float(np.min(limits[over] / magnitudes[over])) if over.any() else 1.0
+        scale = 1.0
+        rate_values = rates.tolist()
+        for velocity, limit in self._rate_limit_rows:
+            magnitude = abs(rate_values[velocity])
+            if magnitude * scale > limit:
+                scale = limit / magnitude
+        return scale
 
     def _clamp(self, q: np.ndarray) -> str:
         """Clamp q in place to the limits; describe the first joint that was past one ('' if none)."""
