@@ -1,0 +1,59 @@
+"""A servo run saved, loaded and reversed (Barker: "recording and reversing a motion")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pinrate
+from pinrate.kinematics.targets import nearby_target
+
+
+@pytest.fixture(scope="module")
+def run() -> tuple[pinrate.Robot, pinrate.Trajectory]:
+    robot = pinrate.load("kinova")  # continuous joints: q holds (cos, sin) pairs
+    _, target = nearby_target(robot, pinrate.Partition.auto(robot), 3)
+    return robot, pinrate.servo(robot, robot.home(), target, algorithm="exact")
+
+
+def test_the_reversed_rates_lead_back_to_the_start(run) -> None:
+    robot, trajectory = run
+    backwards = trajectory.reversed()
+    assert backwards.q.shape == trajectory.q.shape and backwards.steps == trajectory.steps
+    np.testing.assert_array_equal(backwards.q[0], trajectory.q[-1])
+    q = backwards.q[0]
+    for rates in backwards.joint_rates:  # integrated here with Pinocchio, step by step
+        q = pin.integrate(robot.model, q, rates * backwards.dt)
+    np.testing.assert_allclose(q, trajectory.q[0], atol=1e-6)
+    assert backwards.status[-1] == "reversed" and len(backwards.status) == len(trajectory.status)
+    assert backwards.reason.startswith("reversed: ") and not backwards.converged
+
+
+def test_a_trajectory_saves_and_loads(run, tmp_path: Path) -> None:
+    _, trajectory = run
+    path = trajectory.save(tmp_path / "run.npz")
+    loaded = pinrate.Trajectory.load(path)
+    for name in ("q", "position_error", "orientation_error", "spectral_radius", "joint_rates"):
+        np.testing.assert_array_equal(getattr(loaded, name), getattr(trajectory, name))
+    assert loaded.status == trajectory.status and loaded.reason == trajectory.reason
+    assert loaded.converged == trajectory.converged and loaded.dt == trajectory.dt
+    assert loaded.algorithm == trajectory.algorithm and loaded.partition == trajectory.partition
+    # A name without the suffix is written as given.
+    assert trajectory.save(tmp_path / "plain").name == "plain"
+
+
+def test_bad_trajectory_files_are_input_errors(run, tmp_path: Path) -> None:
+    _, trajectory = run
+    with pytest.raises(pinrate.InputError, match="does not exist"):
+        pinrate.Trajectory.load(tmp_path / "missing.npz")
+    (tmp_path / "text.npz").write_text("not an archive", encoding="utf-8")
+    with pytest.raises(pinrate.InputError, match=r"not an \.npz archive"):
+        pinrate.Trajectory.load(tmp_path / "text.npz")
+    np.savez(tmp_path / "other.npz", q=np.zeros(3))
+    with pytest.raises(pinrate.InputError, match="not a pinrate trajectory"):
+        pinrate.Trajectory.load(tmp_path / "other.npz")
+    with pytest.raises(pinrate.InputError, match="folder"):
+        trajectory.save(tmp_path)
