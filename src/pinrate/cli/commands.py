@@ -23,8 +23,9 @@ from ..kinematics.targets import nearby_target
 from ..kinematics.urdf_structure import MAX_JOINTS
 from ..papers import markdown, results
 from ..robots import EXAMPLE_ROBOTS, ROBOT_NAMES, example_robot_data_share, load
+from ..solvers.error_map import THEOREM_ALGORITHMS
 from ..solvers.registry import ALGORITHMS
-from ..theorem.pointwise import THEOREM_ALGORITHMS, coupling_along
+from ..theorem.pointwise import coupling_along
 from .arguments import Parser, count, finite, positive, warn
 
 DEMO_MAX_STEPS = 6000

@@ -28,7 +28,9 @@ Each step at configuration q (Shoham & Koren §2, Fig. 3):
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -113,18 +115,12 @@ class Step:
     detail: str = ""
 
 
-@dataclass(frozen=True)
-class _Limit:
+class _Limit(NamedTuple):  # a tuple: the per-step test reads it on Python floats
     joint: str
     index: int  # into q
     velocity: int  # into v
     lower: float
     upper: float
-
-    def passed_by(self, q: np.ndarray, rates: np.ndarray, dt: float) -> bool:
-        """Whether the commanded rate carries the joint past a limit within dt."""
-        value = q[self.index] + rates[self.velocity] * dt
-        return value > self.upper or value < self.lower
 
     def onto_the_limit(self, q: np.ndarray, rate: float, dt: float) -> float:
         """The rate, cut so that the joint ends the step on its limit at most."""
@@ -180,9 +176,6 @@ class Controller:
             raise InputError(f"position_limits must be True or False, not {position_limits!r}")
         self.position_limits = position_limits
         self._limits = self._position_limits()
-        # The same limits as plain tuples: the test each step makes runs on Python floats
-        # (numpy's per-call overhead exceeds the arithmetic for a handful of joints).
-        self._limit_rows = [(limit.index, limit.velocity, limit.lower, limit.upper) for limit in self._limits]
         self.velocity_limits = self._velocity_limits(velocity_limits)
         self._rate_limit_rows = [
             (velocity, float(limit)) for velocity, limit in enumerate(self.velocity_limits) if math.isfinite(limit)
@@ -277,10 +270,13 @@ class Controller:
             rates = partition_rates(observation.jacobian, self.index, twist, self.algorithm, observation.blocks)
         except SingularBlockError as singular:
             return self._halt(observation, twist, str(singular))
-        statuses, details, frozen = [Status.TWIST_SATURATED] if saturated else [], [], ()
-        if self.position_limits and self._limits and self._passes_a_limit(observation.q, rates):
+        statuses = [Status.TWIST_SATURATED] if saturated else []
+        details: list[str] = []
+        frozen: tuple[str, ...] = ()
+        passing = self._passing(observation.q, rates, ()) if self.position_limits else []
+        if passing:
             try:
-                rates, frozen = self._respect_position_limits(observation, twist, rates)
+                rates, frozen = self._respect_position_limits(observation, twist, rates, passing)
             except SingularBlockError as singular:
                 return self._halt(observation, twist, f"{singular}, with the joints at their limits left out")
             if frozen:
@@ -302,29 +298,30 @@ class Controller:
     def _halt(self, observation: Observation, twist: np.ndarray, detail: str) -> Step:
         return Step(observation.q, np.zeros(self.robot.nv), Status.HALT_FOR_SINGULARITY, (), twist, observation, detail)
 
-    def _passes_a_limit(self, q: np.ndarray, rates: np.ndarray) -> bool:
-        """Whether any commanded rate carries its joint past a limit within dt."""
+    def _passing(self, q: np.ndarray, rates: np.ndarray, skipped: Collection[_Limit]) -> list[_Limit]:
+        """The limits, less ``skipped``, that the commanded rates carry their joints past
+        within dt. On Python floats: numpy's per-call cost exceeds the arithmetic for a
+        handful of joints, and this runs every step."""
         q_values, rate_values, dt = q.tolist(), rates.tolist(), self.dt
-        for index, velocity, lower, upper in self._limit_rows:
-            value = q_values[index] + rate_values[velocity] * dt
-            if value > upper or value < lower:
-                return True
-        return False
+        passing = []
+        for limit in self._limits:
+            value = q_values[limit.index] + rate_values[limit.velocity] * dt
+            if (value > limit.upper or value < limit.lower) and limit not in skipped:
+                passing.append(limit)
+        return passing
 
     def _respect_position_limits(
-        self, observation: Observation, twist: np.ndarray, rates: np.ndarray
+        self, observation: Observation, twist: np.ndarray, rates: np.ndarray, passing: list[_Limit]
     ) -> tuple[np.ndarray, tuple[str, ...]]:
-        """(rates, blocked joints): joints whose commanded rate would pass a limit are left
-        out and the rates solved again, until no remaining joint passes one; each blocked
-        joint goes on at its commanded rate up to its limit, and stops there."""
+        """(rates, blocked joints), from the limits ``passing`` at ``rates``: those joints are
+        left out and the rates solved again, until no remaining joint passes a limit; each
+        blocked joint goes on at its commanded rate up to its limit, and stops there."""
         q = observation.q
         blocked: dict[_Limit, float] = {}  # each blocked joint's rate when it was blocked
-        while True:
-            passing = [limit for limit in self._limits if limit not in blocked and limit.passed_by(q, rates, self.dt)]
-            if not passing:
-                break
+        while passing:
             blocked.update((limit, float(rates[limit.velocity])) for limit in passing)
             rates = self._solve_without(observation, twist, {limit.joint for limit in blocked})
+            passing = self._passing(q, rates, blocked)
         for limit, commanded in blocked.items():
             rates[limit.velocity] = limit.onto_the_limit(q, commanded, self.dt)
         return rates, tuple(limit.joint for limit in blocked)

@@ -108,31 +108,24 @@ def _singular_values(robot: Robot, partition: Partition, q: np.ndarray) -> list[
     return [np.linalg.svd(M, compute_uv=False) if M.size else np.zeros(0) for M in (jacobian, A, W)]
 
 
-def home_quality(robot: Robot, partition: Partition, q: np.ndarray, ranks: Ranks | None = None) -> HomeQuality:
-    """:class:`HomeQuality` at q (one Jacobian, one SVD per matrix). With ``ranks`` (from
-    :func:`generic_ranks`) each matrix is judged by its singular value number rank rather
-    than its last, so directions it can never span do not make every configuration singular;
-    without, by its last (the contract's literal test)."""
+def home_quality(robot: Robot, partition: Partition, q: np.ndarray, ranks: Ranks) -> HomeQuality:
+    """:class:`HomeQuality` at q (one Jacobian, one SVD per matrix). Each matrix is judged by
+    its singular value number rank (``ranks`` from :func:`generic_ranks`) rather than its
+    last, so directions it can never span do not make every configuration singular."""
     values = _singular_values(robot, partition, q)
     if values[0].size == 0:
         return HomeQuality(0.0, 0.0)
     index = partition.resolve(robot)
-    square = (False, index.m == len(index.arm_columns), len(index.rows) - index.m == len(index.wrist_columns))
-    wanted = [vals.size for vals in values] if ranks is None else list(ranks)
+    square = (False, index.m == index.arm_columns.size, index.k == index.wrist_columns.size)
 
     def judged(i: int) -> float:
-        return float(values[i][wanted[i] - 1]) if 0 < wanted[i] <= values[i].size else 0.0
+        return float(values[i][ranks[i] - 1]) if 0 < ranks[i] <= values[i].size else 0.0
 
     smallest = [judged(0)] + [judged(i) for i in (1, 2) if square[i] and values[i].size]
     inverse_conditions = [
         judged(i) / float(values[i][0]) if values[i][0] > 0 else 0.0 for i in (1, 2) if values[i].size
     ]
     return HomeQuality(min(smallest), min(inverse_conditions, default=1.0))
-
-
-def conditioning(robot: Robot, partition: Partition, q: np.ndarray) -> float:
-    """min over the partition's J and its square blocks A, W of the smallest singular value at q."""
-    return home_quality(robot, partition, q).smallest_singular_value
 
 
 def srdf_states(path: Path) -> list[str]:

@@ -54,6 +54,13 @@ def square_and_small(m: int, n_arm: int, k: int, n_wrist: int) -> bool:
     return m == n_arm and k == n_wrist and 0 < m <= 3 and k <= 3
 
 
+def pseudo_g_is_exact(m: int, n_arm: int, k: int, n_wrist: int) -> bool:
+    """A not tall (m <= its columns) and W not wide (k >= its columns): of full rank, A A^+ = I
+    and W^+ W = I, so the pseudo-inverse G has the spectrum of the algorithms' error map
+    (:mod:`pinrate.solvers.error_map`) and the cheap G may stand for it."""
+    return m <= n_arm and k >= n_wrist
+
+
 @dataclass(frozen=True)
 class PartitionIndex:
     """A partition resolved against one robot: row and column indices into J (6, nv)."""
@@ -69,9 +76,7 @@ class PartitionIndex:
     all_rows: bool = field(init=False)  # the rows are 0 .. 5 in order
     small: bool = field(init=False)  # square blocks of size <= 3: closed-form kernels apply
     square: bool = field(init=False)  # A and W square, as the Theorem assumes (else the error map)
-    # A not tall and W not wide: of full rank, their pseudo-inverse G has the error map's
-    # spectrum (A A^+ = I, W^+ W = I; pinrate.solvers.error_map), so the cheap G is exact.
-    pseudo_g: bool = field(init=False)
+    pseudo_g: bool = field(init=False)  # pseudo_g_is_exact for these blocks
     selectors: tuple[Selector, ...] = field(init=False)  # A, B, U, W in J
 
     def __post_init__(self) -> None:
@@ -83,7 +88,7 @@ class PartitionIndex:
         set_(self, "selectors", tuple(selector(r, c) for r in (linear, angular) for c in (arm, wrist)))
         set_(self, "small", square_and_small(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
         set_(self, "square", self.m == self.arm_columns.size and self.k == self.wrist_columns.size)
-        set_(self, "pseudo_g", self.m <= self.arm_columns.size and self.k >= self.wrist_columns.size)
+        set_(self, "pseudo_g", pseudo_g_is_exact(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
         set_(self, "all_columns", columns.tolist() == list(range(self.nv)))
         set_(self, "all_rows", self.rows.tolist() == list(range(6)))
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SingularBlockError
+from ..kinematics.partition import pseudo_g_is_exact
 from . import eigen
 from .error_map import error_map
 from .singular import PINV_RCOND, invertible
@@ -85,7 +86,7 @@ def spectral_radius(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) 
     (:mod:`pinrate.solvers.error_map`; a loop, not batched: user partitions only). A wide A or a
     tall W of full rank (a 7-DOF arm, a 5-DOF arm) keeps the batched G, which equals it.
     """
-    if A.shape[1] > A.shape[2] or W.shape[2] > W.shape[1]:
+    if not pseudo_g_is_exact(A.shape[1], A.shape[2], W.shape[1], W.shape[2]):
         m, arm = A.shape[1], A.shape[2]
         radii = []
         for blocks in zip(A, B, U, W, strict=True):

@@ -43,6 +43,9 @@ import numpy as np
 from ..kinematics.partition import split_blocks
 from .registry import REGISTRY
 
+THEOREM_ALGORITHMS = ("mca1", "mca2", "mca3")
+"""The algorithms the Theorem is about; for the others ρ says nothing about convergence."""
+
 MARGINAL = 1e-9
 """|ρ − 1| up to which ρ is reported as exactly 1: an eigenvalue 1 is structural (a direction
 the algorithm's blocks never correct), and rounding must not turn it into "converges"."""

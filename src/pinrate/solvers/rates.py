@@ -12,7 +12,7 @@ from ..errors import SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex, partition_for, split_blocks
 from . import closed_form, reference
-from .error_map import error_map
+from .error_map import THEOREM_ALGORITHMS, error_map
 from .registry import REGISTRY, check_algorithm
 
 
@@ -69,7 +69,7 @@ def partition_spectral_radius(
         arm = index.arm_columns.size
         if index.pseudo_g:
             return reference.spectral_radius(*split_blocks(reduced, index.m, arm))
-        mca = algorithm if algorithm in ("mca1", "mca2", "mca3") else "mca1"
+        mca = algorithm if algorithm in THEOREM_ALGORITHMS else "mca1"
         return error_map(reduced, index.m, arm, mca).spectral_radius
     except SingularBlockError:
         return math.inf

@@ -27,11 +27,8 @@ from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
 from ..solvers import reference
-from ..solvers.error_map import MARGINAL, error_map
+from ..solvers.error_map import MARGINAL, THEOREM_ALGORITHMS, error_map
 from ..solvers.registry import check_algorithm
-
-THEOREM_ALGORITHMS = ("mca1", "mca2", "mca3")
-"""The algorithms the Theorem is about; for the others ρ says nothing about convergence."""
 
 
 @dataclass(frozen=True)
