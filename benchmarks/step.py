@@ -73,6 +73,8 @@ def measure(robot_name: str, *, batch: int, repeats: int, servo_steps: int) -> l
     }
     for algorithm in ("exact", "mca1", "mca2", "mca3", "schur", "dls"):
         functions[f"pinrate {algorithm} step"] = (step(algorithm), batch)
+    controller = pinrate.Controller(robot, partition=partition)  # default safety: limits, decelerate
+    functions["controller step, default safety (exact)"] = (lambda: controller.step(q, twist), batch)
     functions["bare Pinocchio+numpy exact servo step"] = (bare_servo_step, batch)
     functions["pinrate full servo step (mca1)"] = (servo_step, 1)  # one run, divided below
     medians = interleaved_medians(functions, repeats)
@@ -107,6 +109,11 @@ def main() -> None:
     print(
         f"target: mca1 step <= 0.8x exact step     measured {mca1_ratio:.2f}x  "
         f"{'met' if mca1_ratio <= 0.8 else 'NOT met'}"
+    )
+    default = timings["controller step, default safety (exact)"] / timings["pinrate full servo step (mca1)"]
+    print(
+        f"target: default controller step <= full servo step  measured {default:.2f}x  "
+        f"{'met' if default <= 1 else 'NOT met'}"
     )
     bare = timings["bare Pinocchio+numpy exact servo step"] / floor
     print(f"(a servo step's bare Pinocchio+numpy calls alone cost {bare:.2f}x floor)")

@@ -47,14 +47,13 @@ def test_a_pose_goal_commands_gain_times_the_error(ur5: pinrate.Robot) -> None:
     np.testing.assert_allclose(step.twist, expected, atol=1e-15)
 
 
-def test_a_singular_block_halts_instead_of_raising(ur5: pinrate.Robot) -> None:
+def test_a_wrist_singularity_is_the_wrist_strategy_s_not_a_halt(ur5: pinrate.Robot) -> None:
     q = ur5.home()
-    q[4] = 0.0  # wrist_2 = 0: W is singular
+    q[4] = 0.0  # wrist_2 = 0: W is singular; the step goes on by wrist="split" (contract v2)
     step = Controller(ur5, algorithm="mca1").step(q, np.full(6, 0.1))
-    assert step.status is Status.HALT_FOR_SINGULARITY
-    assert "block W" in step.detail
-    np.testing.assert_array_equal(step.q, q)
-    assert not step.joint_rates.any()
+    assert step.status is Status.WRIST_SINGULARITY
+    assert "wrist_1_joint and wrist_3_joint" in step.detail
+    assert np.isfinite(step.q).all() and np.isfinite(step.joint_rates).all()
     assert step.observation.spectral_radius == np.inf
 
 

@@ -105,13 +105,26 @@ def test_a_joint_limit_holds_the_joint_and_the_run_stalls_there() -> None:
     assert trajectory.position_error.shape == (trajectory.q.shape[0],)
 
 
-def test_singular_block_stops_the_run() -> None:
+def test_a_run_leaves_a_singular_start_and_halts_before_a_singular_end() -> None:
     robot = pinrate.robots.two_link_planar()
     position_only = Partition(["theta1", "theta2"], [], linear="xy", angular="")
+    # From the stretched arm (A singular) towards a reachable target: the generalized inverse's
+    # step raises A's conditioning, so decelerate executes it and the run converges.
     target = robot.pose(np.array([0.5, 1.0]))
     trajectory = pinrate.servo(robot, np.array([0.0, 0.0]), target, partition=position_only)
-    assert trajectory.reason.startswith("singular") and not trajectory.converged
     assert trajectory.spectral_radius[0] == math.inf
+    assert trajectory.converged, trajectory.reason
+    # Towards a target beyond reach: the arm stretches, and halts before A is singular.
+    far = np.eye(4)
+    far[:3, 3] = [5.0, 1.0, 0.0]
+    trajectory = pinrate.servo(robot, np.array([0.3, 0.8]), far, partition=position_only, max_steps=10**6)
+    assert trajectory.reason.startswith("singular") and not trajectory.converged
+    controller = pinrate.Controller(robot, partition=position_only, algorithm="mca1")
+    last = controller.conditioning(trajectory.q[-1])
+    # The servo's steps are big (0.5 m/s x 0.01 s): it halts where the next one would have
+    # taken A under singular_threshold, here from about c = 0.03.
+    assert controller.singular_threshold <= last.value < 2 * controller.slow_threshold
+    assert last.block == "A" and "halted" in trajectory.reason
 
 
 def test_speed_saturation(ur5: pinrate.Robot) -> None:
@@ -195,8 +208,16 @@ def test_an_unreachable_target_stalls_whatever_max_steps(tmp_path, algorithm: st
     target = np.eye(4)
     target[:3, 3] = [5.0, 0.0, 0.0]
     gain, dt = 1.0, 0.01
+    # The generalized inverse lets the arm stretch on (decelerate would halt it, the test above).
     trajectory = pinrate.servo(
-        robot, q0, target, algorithm=algorithm, partition=partition, max_steps=10**12, stall_time=stall_time
+        robot,
+        q0,
+        target,
+        algorithm=algorithm,
+        partition=partition,
+        max_steps=10**12,
+        stall_time=stall_time,
+        singularity="generalized_inverse",
     )
     assert trajectory.status[-1] == "stalled" and trajectory.reason.startswith("stalled")
     window = round((max(1.0, 5.0 / gain) if stall_time is None else stall_time) / dt)

@@ -28,7 +28,7 @@ Each step at configuration q (Shoham & Koren §2, Fig. 3):
 from __future__ import annotations
 
 import math
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -37,13 +37,34 @@ import pinocchio as pin
 
 from ..checks import as_pose, check_positive, check_vector
 from ..errors import InputError, SingularBlockError
+from ..kinematics.home import generic_ranks
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition, partition_for
+from ..kinematics.partition import Partition, PartitionIndex, partition_for
 from ..kinematics.spatial import pose_error, saturate
 from ..solvers import closed_form
+from ..solvers.conditioning import characteristic_length, inverse_condition_bound, row_scale
+from ..solvers.generalized import damped_inverter, filtered_rates, generalized_inverter
 from ..solvers.rates import partition_rates, partition_spectral_radius
+from ..solvers.reference import Inverter
 from ..solvers.registry import check_algorithm
-from .status import Status, most_severe
+from .singularity import (
+    SINGULAR_THRESHOLD,
+    SLOW_THRESHOLD,
+    STRATEGIES,
+    WRIST_STRATEGIES,
+    ColumnMap,
+    Conditioning,
+    adaptive_damping,
+    block_of,
+    carrying_joints,
+    check_strategy,
+    check_thresholds,
+    conditioning,
+    deceleration,
+    measured_blocks,
+    wrist_pair,
+)
+from .status import Status, ranked
 
 MAX_LINEAR_SPEED = 0.5
 """Default speed limit of the commanded TCP velocity (m/s)."""
@@ -77,7 +98,8 @@ class Observation:
         jacobian: the sensor-frame Jacobian (6, nv).
         world_T_tip, world_T_sensor: the tip and sensor poses in the world.
         blocks: A, B, U, W as nested lists when the closed-form kernels apply, else None.
-        spectral_radius: ρ of the smaller of G and H (inf where A or W is singular).
+        algorithm: the controller's algorithm (ρ is that of its error map where it differs).
+        index: the controller's resolved partition.
         goal: the pose goal ``error`` was measured against, if any.
         error: the controlled pose error (m + k,) in partition order, sensor axes (m, rad).
     """
@@ -87,9 +109,19 @@ class Observation:
     world_T_tip: pin.SE3
     world_T_sensor: pin.SE3
     blocks: closed_form.Blocks | None
-    spectral_radius: float
+    algorithm: str
+    index: PartitionIndex
     goal: PoseGoal | None = None
     error: np.ndarray | None = None
+    _spectral_radius: float | None = None
+
+    @property
+    def spectral_radius(self) -> float:
+        """ρ of the smaller of G and H (eq. 32, 50; inf where A or W is singular), computed on
+        first use: a control step that does not report it does not pay for it."""
+        if self._spectral_radius is None:
+            self._spectral_radius = partition_spectral_radius(self.jacobian, self.index, self.blocks, self.algorithm)
+        return self._spectral_radius
 
 
 @dataclass(slots=True)  # a record, read-only by convention
@@ -103,7 +135,10 @@ class Step:
         frozen: names of the joints held still in this step.
         twist: the twist commanded after saturation (m + k,), partition order, sensor axes.
         observation: what the controller saw at the start of the step.
-        detail: why the status is not OK, in words ("" when OK).
+        detail: why the status is not OK, in words ("" when OK): which joint, which block,
+            what conditioning, what scale.
+        conditions: every condition met in this step, least severe first (``status`` is
+            the last; empty when OK).
     """
 
     q: np.ndarray
@@ -113,6 +148,7 @@ class Step:
     twist: np.ndarray
     observation: Observation
     detail: str = ""
+    conditions: tuple[Status, ...] = ()
 
 
 class _Limit(NamedTuple):  # a tuple: the per-step test reads it on Python floats
@@ -128,9 +164,34 @@ class _Limit(NamedTuple):  # a tuple: the per-step test reads it on Python float
         return min(max(rate, (self.lower - value) / dt), (self.upper - value) / dt)
 
 
+WATCH_FACTOR = 3.0
+"""A decelerating controller looks one step ahead from a conditioning bound under this many
+times ``slow_threshold`` when the step is big (:data:`WATCHED_STEP`)."""
+
+WATCHED_STEP = 0.02
+"""rad (or m): a step moving some joint further than this, near the singular region, is
+judged one step ahead."""
+
 VELOCITY_LIMIT_UNLIMITED = 1e6
 """A URDF velocity limit of 0 (what converters write for "unknown") or above this (rad/s or
 m/s) means no limit."""
+
+
+class _Plan(NamedTuple):
+    """How a step in the singular region solves: the change of variables of the wrist and the
+    frozen joints, the inversion used, and what to report."""
+
+    columns: ColumnMap  # the variables the step solves for (wrist pair merged or held, frozen dropped)
+    dropped: frozenset[int]  # partition positions held still by the plan (a held wrist joint, frozen joints)
+    merged: tuple[int, int, float] | None  # the wrist pair moving as one (split)
+    released_by: tuple[int, int] | None  # (held, last): last_then_first releases held when last is blocked
+    invert: Inverter
+    value: float  # c of the solved system at q
+    block: str
+    decelerate: bool
+    statuses: tuple[Status, ...]
+    details: tuple[str, ...]
+    frozen: tuple[str, ...]
 
 
 class Controller:
@@ -141,15 +202,23 @@ class Controller:
         algorithm: a name of :data:`pinrate.ALGORITHMS`.
         partition: which joints and twist rows take part; None means ``Partition.auto(robot)``.
         dt: control period in seconds.
-        max_linear_speed, max_angular_speed: saturation of the commanded twist (m/s, rad/s;
-            inf for none).
+        singularity: what a step in the singular region does, a name of
+            :data:`~pinrate.control.singularity.STRATEGIES` (see that module).
+        wrist: how two aligned wrist axes share a rotation, a name of
+            :data:`~pinrate.control.singularity.WRIST_STRATEGIES`.
         velocity_limits: None for the URDF's ``<limit velocity>`` of each joint (none where it
             gives 0 or none), a number for every joint, or one per velocity component (nv,),
             in rad/s or m/s; inf for none. When one binds, all rates are scaled alike.
         position_limits: keep q within the joints' position limits (see the module docstring).
+        singular_threshold, slow_threshold: inverse condition numbers σ_min/σ_max of the
+            inverted blocks (dimensionless, 0 <= singular < slow <= 1): under ``slow`` a step
+            is in the singular region, under ``singular`` a block counts as singular.
+        max_linear_speed, max_angular_speed: saturation of the commanded twist (m/s, rad/s;
+            inf for none).
 
     Raises:
-        InputError: an unknown algorithm, a bad partition, a dt or speed that is not positive,
+        InputError: an unknown algorithm or strategy (the message lists the valid ones), a
+            bad partition, a dt or speed that is not positive, thresholds out of order,
             velocity limits that are not positive or of the wrong length.
     """
 
@@ -160,16 +229,23 @@ class Controller:
         algorithm: str = "exact",
         partition: Partition | None = None,
         dt: float = 0.01,
-        max_linear_speed: float = MAX_LINEAR_SPEED,
-        max_angular_speed: float = MAX_ANGULAR_SPEED,
+        singularity: str = "decelerate",
+        wrist: str = "split",
         velocity_limits: object = None,
         position_limits: bool = True,
+        singular_threshold: float = SINGULAR_THRESHOLD,
+        slow_threshold: float = SLOW_THRESHOLD,
+        max_linear_speed: float = MAX_LINEAR_SPEED,
+        max_angular_speed: float = MAX_ANGULAR_SPEED,
     ) -> None:
         self.robot = robot
         self.algorithm = check_algorithm(algorithm)
         self.partition = partition_for(robot, partition)
         self.index = self.partition.resolve(robot)
         self.dt = check_positive(dt, "dt")
+        self.singularity = check_strategy(singularity, STRATEGIES, "singularity strategy")
+        self.wrist = check_strategy(wrist, WRIST_STRATEGIES, "wrist strategy")
+        self.singular_threshold, self.slow_threshold = check_thresholds(singular_threshold, slow_threshold)
         self.max_linear_speed = check_positive(max_linear_speed, "max_linear_speed", allow_inf=True)
         self.max_angular_speed = check_positive(max_angular_speed, "max_angular_speed", allow_inf=True)
         if not isinstance(position_limits, bool):
@@ -180,6 +256,18 @@ class Controller:
         self._rate_limit_rows = [
             (velocity, float(limit)) for velocity, limit in enumerate(self.velocity_limits) if math.isfinite(limit)
         ]
+        index = self.index
+        self._names = self.partition.arm + self.partition.wrist  # partition order
+        self._positions = {name: position for position, name in enumerate(self._names)}
+        self._measured = measured_blocks(self.algorithm)
+        home = robot.jacobian_unchecked(robot.home())[np.ix_(index.rows, index.columns)]
+        self.characteristic_length = characteristic_length(home, index.m)
+        """L (m): J's linear rows are divided by it before J is measured or pseudo-inverted."""
+        self._row_scale = row_scale(index.m, index.k, self.characteristic_length)
+        self._row_scale_column = self._row_scale[:, None]
+        ranks = generic_ranks(robot, self.partition)
+        self._ranks = {"J": ranks[0], "A": ranks[1], "W": ranks[2]}
+        self._square_j = index.rows.size == index.columns.size == ranks[0]
 
     def _position_limits(self) -> list[_Limit]:
         """The partition's 1-DOF joints with finite position limits."""
@@ -214,7 +302,7 @@ class Controller:
 
     # ------------------------------------------------------------------ seeing
     def observe(self, q: object, goal: PoseGoal | None = None) -> Observation:
-        """Kinematics, blocks and ρ at q (one Pinocchio pass); the pose error to ``goal`` too
+        """Kinematics and blocks at q (one Pinocchio pass); the pose error to ``goal`` too
         when given. q is checked (:meth:`Robot.check_q`)."""
         if goal is not None and not isinstance(goal, PoseGoal):
             raise InputError(f"goal must be a PoseGoal (PoseGoal.of(target, gain)), not {type(goal).__name__}")
@@ -227,8 +315,46 @@ class Controller:
         jacobian, world_T_tip, world_T_sensor = self.robot.kinematics(q)
         error = None if goal is None else pose_error(world_T_tip, world_T_sensor, goal.target)[index.rows]
         parts = closed_form.blocks(jacobian, index.selectors) if index.small else None
-        radius = partition_spectral_radius(jacobian, index, parts, self.algorithm)
-        return Observation(q, jacobian, world_T_tip, world_T_sensor, parts, radius, goal, error)
+        return Observation(q, jacobian, world_T_tip, world_T_sensor, parts, self.algorithm, index, goal, error)
+
+    def conditioning(self, q: object) -> Conditioning:
+        """The least inverse condition number σ_r/σ_1 of the blocks the algorithm inverts at q,
+        which block, and its weakest joint motion (:mod:`pinrate.control.singularity`)."""
+        return self._conditioning(self._reduced(self.observe(q).jacobian), self.index.arm_columns.size)
+
+    def _reduced(self, jacobian: np.ndarray) -> np.ndarray:
+        """J restricted to the partition (m + k, n), partition order."""
+        index = self.index
+        return jacobian if index.all_rows and index.all_columns else jacobian[np.ix_(index.rows, index.columns)]
+
+    def _conditioning(self, reduced: np.ndarray, n_arm: int) -> Conditioning:
+        return conditioning(reduced, self.index.m, n_arm, self._measured, self._row_scale, self._ranks)
+
+    def _conditioning_bound(self, observation: Observation) -> float:
+        """A cheap lower bound of the least c of the measured blocks (0.0 where none is cheap):
+        1 / (||M||_F ||M^-1||_F) from the closed-form inverses of A, W and numpy's of J."""
+        bound = math.inf
+        for name in self._measured:
+            if name == "J":
+                if not self._square_j:
+                    return 0.0
+                scaled = self._reduced(observation.jacobian) * self._row_scale_column
+                try:
+                    bound = min(bound, inverse_condition_bound(scaled, np.linalg.inv(scaled)))
+                except np.linalg.LinAlgError:
+                    return 0.0
+                continue
+            parts = observation.blocks
+            if parts is None:
+                return 0.0
+            block = parts[0] if name == "A" else parts[3]
+            if not block or not block[0]:
+                continue
+            try:
+                bound = min(bound, inverse_condition_bound(block, closed_form.inverse(block, name)))
+            except SingularBlockError:
+                return 0.0
+        return bound
 
     # ------------------------------------------------------------------ acting
     def command_twist(self, observation: Observation, command: np.ndarray | PoseGoal) -> tuple[np.ndarray, bool]:
@@ -255,33 +381,59 @@ class Controller:
             observation: :meth:`observe` at q, when the caller already has it (the servo
                 measures its stop rules on it): it is reused, not recomputed.
 
-        A singular square block halts the step (``Status.HALT_FOR_SINGULARITY``, q kept,
-        rates 0); joints that the command would carry past a position limit are held at it
-        while the others serve the command (``Status.JOINT_LIMIT``, ``frozen``); rates over
-        a velocity limit are all scaled alike (``Status.RATE_LIMITED``). Never raises for
-        what the robot does.
+        In the singular region the ``singularity=`` and ``wrist=`` strategies decide
+        (:mod:`pinrate.control.singularity`); joints that the command would carry past a
+        position limit are held at it while the others serve the command
+        (``Status.JOINT_LIMIT``, ``frozen``); rates over a velocity limit are all scaled alike
+        (``Status.RATE_LIMITED``). Never raises for what the robot does, and never returns
+        NaN or inf.
         """
         if observation is None:
             observation = self.observe(q)
         if not isinstance(command, PoseGoal):
             command = check_vector(command, self.index.rows.size, "twist (linear then angular components)")
         twist, saturated = self.command_twist(observation, command)
-        try:
-            rates = partition_rates(observation.jacobian, self.index, twist, self.algorithm, observation.blocks)
-        except SingularBlockError as singular:
-            return self._halt(observation, twist, str(singular))
         statuses = [Status.TWIST_SATURATED] if saturated else []
         details: list[str] = []
+        bound = self._conditioning_bound(observation)
+        plan = self._plan(observation, twist) if bound < self.slow_threshold else None
         frozen: tuple[str, ...] = ()
+        if plan is None:
+
+            def solve(left_out: frozenset[str]) -> np.ndarray:
+                return self._solve_without(observation, twist, left_out)
+
+        else:
+
+            def solve(left_out: frozenset[str]) -> np.ndarray:
+                return self._solve_planned(observation, twist, plan, left_out)
+
+            statuses.extend(plan.statuses)
+            details.extend(plan.details)
+            frozen = plan.frozen
+        try:
+            rates = solve(frozenset())
+        except SingularBlockError as singular:
+            return self._halt(observation, twist, str(singular))
         passing = self._passing(observation.q, rates, ()) if self.position_limits else []
         if passing:
             try:
-                rates, frozen = self._respect_position_limits(observation, twist, rates, passing)
+                rates, blocked = self._respect_position_limits(observation, rates, passing, solve)
             except SingularBlockError as singular:
                 return self._halt(observation, twist, f"{singular}, with the joints at their limits left out")
-            if frozen:
+            if blocked:
                 statuses.append(Status.JOINT_LIMIT)
-                details.append(f"held at a position limit: {', '.join(frozen)}")
+                details.append(f"held at a position limit: {', '.join(blocked)}")
+                frozen = frozen + tuple(name for name in blocked if name not in frozen)
+        watched = self._watched(observation, plan, bound, rates)
+        if watched is not None:
+            scale, status, detail = self._decelerate(observation, rates, *watched)
+            if status is Status.HALT_FOR_SINGULARITY:
+                return self._halt(observation, twist, detail)
+            if status is not Status.OK:
+                rates = rates * scale
+                statuses.append(status)
+                details.append(detail)
         scale = self._rate_scale(rates)
         if scale < 1.0:
             rates = rates * scale
@@ -290,14 +442,191 @@ class Controller:
         next_q = self.robot.integrate(observation.q, rates, self.dt)
         if self.position_limits:
             hit = self._clamp(next_q)
-            if hit and not frozen:
+            if hit and Status.JOINT_LIMIT not in statuses:
                 statuses.append(Status.JOINT_LIMIT)
                 details.append(hit)
-        return Step(next_q, rates, most_severe(*statuses), frozen, twist, observation, "; ".join(details))
+        conditions = ranked(statuses)
+        status = conditions[-1] if conditions else Status.OK
+        return Step(next_q, rates, status, frozen, twist, observation, "; ".join(details), conditions)
 
     def _halt(self, observation: Observation, twist: np.ndarray, detail: str) -> Step:
-        return Step(observation.q, np.zeros(self.robot.nv), Status.HALT_FOR_SINGULARITY, (), twist, observation, detail)
+        return Step(
+            observation.q.copy(),
+            np.zeros(self.robot.nv),
+            Status.HALT_FOR_SINGULARITY,
+            (),
+            twist,
+            observation,
+            detail,
+            (Status.HALT_FOR_SINGULARITY,),
+        )
 
+    # ------------------------------------------------------------------ singular region
+    def _watched(
+        self, observation: Observation, plan: _Plan | None, bound: float, rates: np.ndarray
+    ) -> tuple[ColumnMap, float, str] | None:
+        """(columns, c, block) when ``singularity="decelerate"`` must judge this step one step
+        ahead: every step in the singular region, and a step from just outside it (bound
+        under :data:`WATCH_FACTOR` x slow) that moves some joint more than
+        :data:`WATCHED_STEP` rad, which could enter the region or cross a singularity in one
+        step (a servo's big steps do). None otherwise."""
+        if self.singularity != "decelerate":
+            return None
+        if plan is not None:
+            return (plan.columns, plan.value, plan.block) if plan.decelerate else None
+        if (
+            bound >= WATCH_FACTOR * self.slow_threshold
+            or float(np.abs(rates).max(initial=0.0)) * self.dt <= WATCHED_STEP
+        ):
+            return None
+        index = self.index
+        columns = ColumnMap.of(index.arm_columns.size, index.wrist_columns.size, frozenset(), None)
+        here = self._conditioning(self._reduced(observation.jacobian), index.arm_columns.size)
+        return columns, here.value, here.block
+
+    def _plan(self, observation: Observation, twist: np.ndarray) -> _Plan | None:
+        """How to solve at a q whose cheap bound fell under ``slow_threshold``; None when the
+        exact c of every measured block is above it after all."""
+        reduced = self._reduced(observation.jacobian)
+        n_arm, n_wrist = self.index.arm_columns.size, self.index.wrist_columns.size
+        weakest = self._conditioning(reduced, n_arm)
+        if weakest.value >= self.slow_threshold:
+            return None
+        statuses: list[Status] = []
+        details: list[str] = []
+        dropped: frozenset[int] = frozenset()
+        merged = released_by = None
+        pair = wrist_pair(weakest, n_arm)
+        if pair is not None:
+            first, last, _ = pair
+            names = f"{self._names[first]} and {self._names[last]}"
+            if self.wrist == "split":
+                merged = pair
+                how = "they share the rotation about the common axis"
+            else:
+                dropped = frozenset([first])
+                released_by = (first, last) if self.wrist == "last_then_first" else None
+                how = f"{self._names[first]} holds, {self._names[last]} takes the rotation"
+            statuses.append(Status.WRIST_SINGULARITY)
+            details.append(f"wrist axes of {names} aligned (c({weakest.block}) = {weakest.value:.2g}): {how}")
+            columns = ColumnMap.of(n_arm, n_wrist, dropped, merged)
+            weakest = self._conditioning(reduced @ columns.matrix, columns.n_arm)
+        generalized = generalized_inverter(self.singular_threshold)
+        columns = ColumnMap.of(n_arm, n_wrist, dropped, merged)
+        if weakest.value >= self.slow_threshold:
+            return _Plan(
+                columns,
+                dropped,
+                merged,
+                released_by,
+                generalized,
+                weakest.value,
+                weakest.block,
+                False,
+                tuple(statuses),
+                tuple(details),
+                (),
+            )
+        where = f"block {weakest.block} near singular (c = {weakest.value:.2g} < {self.slow_threshold:g})"
+        frozen: tuple[str, ...] = ()
+        invert, decelerate = generalized, False
+        if self.singularity == "decelerate":
+            decelerate = True
+        elif self.singularity == "generalized_inverse":
+            statuses.append(Status.NEAR_SINGULARITY)
+            cut = "directions cut" if weakest.value < self.singular_threshold else "no direction cut"
+            details.append(f"{where}: generalized inverse, {cut}")
+        elif self.singularity == "adaptive_dls":
+            damping = adaptive_damping(weakest.value, self.slow_threshold)
+            invert = damped_inverter(damping)
+            statuses.append(Status.NEAR_SINGULARITY)
+            details.append(f"{where}: damped least squares, λ = {damping:.2g} σ_1")
+        else:  # freeze
+            plan = _Plan(
+                columns, dropped, merged, released_by, generalized, weakest.value, weakest.block, False, (), (), ()
+            )
+            free = self._solve_planned(observation, twist, plan, frozenset())
+            if self._lookahead(observation, free, columns) <= weakest.value:
+                carrying = {
+                    position
+                    for variable in carrying_joints(weakest)
+                    for position in np.flatnonzero(columns.matrix[:, variable]).tolist()
+                }
+                dropped = dropped | frozenset(carrying)
+                frozen = tuple(self._names[position] for position in sorted(carrying))
+                columns = ColumnMap.of(n_arm, n_wrist, dropped, merged)
+                statuses.append(Status.FROZEN)
+                details.append(f"{where}: {', '.join(frozen)} held still")
+        return _Plan(
+            columns,
+            dropped,
+            merged,
+            released_by,
+            invert,
+            weakest.value,
+            weakest.block,
+            decelerate,
+            tuple(statuses),
+            tuple(details),
+            frozen,
+        )
+
+    def _solve_planned(
+        self, observation: Observation, twist: np.ndarray, plan: _Plan, left_out: frozenset[str]
+    ) -> np.ndarray:
+        """Rates (nv,) by the plan's change of variables and inversion, ``left_out`` joints
+        (blocked at a limit) held too. Finite for every J."""
+        index = self.index
+        dropped = plan.dropped | {self._positions[name] for name in left_out}
+        if plan.released_by is not None and plan.released_by[1] in dropped:
+            dropped = dropped - {plan.released_by[0]}  # last_then_first: the last is held, the first turns
+        columns = (
+            plan.columns
+            if dropped == plan.dropped
+            else ColumnMap.of(index.arm_columns.size, index.wrist_columns.size, dropped, plan.merged)
+        )
+        reduced = self._reduced(observation.jacobian) @ columns.matrix
+        solved = filtered_rates(reduced, index.m, columns.n_arm, twist, self.algorithm, plan.invert, self._row_scale)
+        rates = np.zeros(self.robot.nv)
+        rates[index.columns] = columns.matrix @ solved
+        return rates
+
+    def _signs(self, reduced: np.ndarray, n_arm: int) -> tuple[float, ...]:
+        """Signs of the determinants of the measured blocks that are square: a step that
+        flips one has crossed a singularity, whatever c is at its two ends."""
+        blocks = (block_of(name, reduced, self.index.m, n_arm, self._row_scale) for name in self._measured)
+        return tuple(float(np.sign(np.linalg.det(M))) for M in blocks if M.size and M.shape[0] == M.shape[1])
+
+    def _lookahead(self, observation: Observation, rates: np.ndarray, columns: ColumnMap) -> tuple[float, bool]:
+        """(c, crossed): c of the system ``columns`` solves one step of ``rates`` ahead (one
+        kinematics pass), and whether the step crosses a singularity of a square block."""
+        here = self._reduced(observation.jacobian) @ columns.matrix
+        ahead = self._reduced(self.robot.kinematics(self.robot.integrate(observation.q, rates, self.dt))[0])
+        ahead = ahead @ columns.matrix
+        signs = zip(self._signs(here, columns.n_arm), self._signs(ahead, columns.n_arm), strict=True)
+        crossed = any(now * then < 0.0 for now, then in signs)  # leaving det = 0 is no crossing
+        return self._conditioning(ahead, columns.n_arm).value, crossed
+
+    def _decelerate(
+        self, observation: Observation, rates: np.ndarray, columns: ColumnMap, value: float, block: str
+    ) -> tuple[float, Status, str]:
+        """(scale, status, detail) of a step at c = ``value``, judged one step ahead: unscaled
+        when it raises c (without crossing a singularity); a halt when the unscaled step
+        would cross a singularity or carry c under singular_threshold; else scaled by
+        (c - singular) / (slow - singular), c the lesser of now and ahead."""
+        ahead, crossed = self._lookahead(observation, rates, columns)
+        where = f"block {block} near singular (c = {min(value, ahead):.2g})"
+        crossed = crossed and value >= self.singular_threshold  # sign(det) next to det = 0 is noise
+        if ahead > value and not crossed:
+            return 1.0, Status.OK, ""
+        if crossed or ahead < self.singular_threshold:
+            return 0.0, Status.HALT_FOR_SINGULARITY, f"{where}: halted, the step would make it singular"
+        scale = deceleration(min(value, ahead), self.singular_threshold, self.slow_threshold)
+        if scale >= 1.0:
+            return 1.0, Status.OK, ""
+        return scale, Status.DECELERATE_FOR_SINGULARITY, f"{where}: command scaled by {scale:.2g}"
+
+    # ------------------------------------------------------------------ limits
     def _passing(self, q: np.ndarray, rates: np.ndarray, skipped: Collection[_Limit]) -> list[_Limit]:
         """The limits, less ``skipped``, that the commanded rates carry their joints past
         within dt. On Python floats: numpy's per-call cost exceeds the arithmetic for a
@@ -311,24 +640,30 @@ class Controller:
         return passing
 
     def _respect_position_limits(
-        self, observation: Observation, twist: np.ndarray, rates: np.ndarray, passing: list[_Limit]
+        self,
+        observation: Observation,
+        rates: np.ndarray,
+        passing: list[_Limit],
+        solve: Callable[[frozenset[str]], np.ndarray],
     ) -> tuple[np.ndarray, tuple[str, ...]]:
         """(rates, blocked joints), from the limits ``passing`` at ``rates``: those joints are
-        left out and the rates solved again, until no remaining joint passes a limit; each
-        blocked joint goes on at its commanded rate up to its limit, and stops there."""
+        left out and the rates solved again by ``solve``, until no remaining joint passes a
+        limit; each blocked joint goes on at its commanded rate up to its limit, and stops there."""
         q = observation.q
         blocked: dict[_Limit, float] = {}  # each blocked joint's rate when it was blocked
         while passing:
             blocked.update((limit, float(rates[limit.velocity])) for limit in passing)
-            rates = self._solve_without(observation, twist, {limit.joint for limit in blocked})
+            rates = solve(frozenset(limit.joint for limit in blocked))
             passing = self._passing(q, rates, blocked)
         for limit, commanded in blocked.items():
             rates[limit.velocity] = limit.onto_the_limit(q, commanded, self.dt)
         return rates, tuple(limit.joint for limit in blocked)
 
-    def _solve_without(self, observation: Observation, twist: np.ndarray, left_out: set[str]) -> np.ndarray:
+    def _solve_without(self, observation: Observation, twist: np.ndarray, left_out: frozenset[str]) -> np.ndarray:
         """The algorithm's rates with the ``left_out`` joints removed from the partition (they
         get rate 0 here). Raises SingularBlockError as the algorithm does."""
+        if not left_out:
+            return partition_rates(observation.jacobian, self.index, twist, self.algorithm, observation.blocks)
         partition = self.partition
         reduced = Partition(
             [joint for joint in partition.arm if joint not in left_out],

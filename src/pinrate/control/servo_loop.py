@@ -30,7 +30,8 @@ norms ``tol`` applies to):
   gives), or for STALL_MAX_STEPS steps, whichever is fewer. Every continuing window improves
   e by 1 %, and e cannot fall below ``tol`` without converging, so a run ends after at most
   ln(e0 / tol) / ln(1 / 0.99) windows whatever ``max_steps`` is.
-- **singular**: the step halted at a singular square block (:class:`~.status.Status`).
+- **singular**: the step halted for a singularity (``singularity="decelerate"``: the next
+  step would have made a block singular; or the algorithm met a singular block).
 
 A joint limit does not stop the run: the step holds the joint on its limit while the others
 go on serving the error (a target the held joint was needed for then ends as "stalled").
@@ -69,6 +70,10 @@ _STEP_WORDS = {
     Status.TWIST_SATURATED: "saturated",
     Status.JOINT_LIMIT: "joint limit",
     Status.RATE_LIMITED: "rate limited",
+    Status.WRIST_SINGULARITY: "wrist singularity",
+    Status.NEAR_SINGULARITY: "near singularity",
+    Status.DECELERATE_FOR_SINGULARITY: "decelerating",
+    Status.FROZEN: "frozen",
 }
 """The word a step's status leaves in ``Trajectory.status`` ("moving" for the others)."""
 
@@ -91,6 +96,8 @@ def servo(
     max_angular_speed: float = MAX_ANGULAR_SPEED,
     stall_time: float | None = None,
     velocity_limits: object = math.inf,
+    singularity: str = "decelerate",
+    wrist: str = "split",
 ) -> Trajectory:
     """Servo the tip from q0 to ``target`` (4x4 pose in the world, or pinocchio.SE3).
 
@@ -98,10 +105,10 @@ def servo(
     both below ``tol`` (converged), or with a reason (see the module's stop rules): the error
     grew past DIVERGENCE_FACTOR times its best (diverging), it has not improved by
     STALL_IMPROVEMENT for ``stall_time`` seconds (stalled; default max(1 s, 5 / gain)), a
-    square block became singular, or ``max_steps`` ran out. Joints are held at their position
-    limits while the others go on (:class:`Controller`). ``velocity_limits`` as for
-    :class:`Controller`: the default, none, keeps the papers' simulations as they were; None
-    takes the URDF's.
+    step halted for a singularity, or ``max_steps`` ran out. Joints are held at their position
+    limits while the others go on (:class:`Controller`). ``velocity_limits``, ``singularity``
+    and ``wrist`` as for :class:`Controller`: the default velocity limits, none, keep the
+    papers' simulations as they were; None takes the URDF's.
     """
     controller = Controller(
         robot,
@@ -111,6 +118,8 @@ def servo(
         max_linear_speed=max_linear_speed,
         max_angular_speed=max_angular_speed,
         velocity_limits=velocity_limits,
+        singularity=singularity,
+        wrist=wrist,
     )
     q = robot.check_q(q0)
     goal = PoseGoal.of(target, gain)

@@ -30,8 +30,10 @@ class Trajectory:
         orientation_error: norm of the controlled rotation error (rad), (N,).
         spectral_radius: ρ of the smaller of G and H (inf where A or W is singular), (N,).
         status: per configuration, "moving", "saturated" (TCP speed limit active), "joint
-            limit" (a joint held at a position limit), "rate limited" (a velocity limit bound)
-            or the final state ("converged", "diverging", "stalled", "singular", "max steps";
+            limit" (a joint held at a position limit), "rate limited" (a velocity limit bound),
+            "wrist singularity", "near singularity", "decelerating", "frozen" (the
+            singularity strategies, :mod:`pinrate.control.singularity`) or the final state
+            ("converged", "diverging", "stalled", "singular", "max steps";
             see :mod:`pinrate.control.servo_loop`).
         joint_rates: the rates applied after each configuration but the last, (N - 1, nv).
         converged: both errors below tol at the last configuration.

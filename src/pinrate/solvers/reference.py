@@ -15,6 +15,8 @@ least-squares solution and ``dls`` is always finite.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..errors import SingularBlockError
@@ -27,6 +29,10 @@ DLS_DAMPING = 1e-2
 """Damping λ of :func:`dls` (in the twist's mixed units: m/s and rad/s per unit rate)."""
 
 Blocks = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+Inverter = Callable[[np.ndarray, str], np.ndarray]
+"""(block, its name) -> its inverse: :func:`inverse`, or a generalized inverse that stays
+finite at singular blocks (:mod:`pinrate.solvers.generalized`)."""
 
 
 def inverse(M: np.ndarray, block: str) -> np.ndarray:
@@ -69,7 +75,13 @@ def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
 
 
 def schur(
-    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray, v: np.ndarray, omega: np.ndarray
+    A: np.ndarray,
+    B: np.ndarray,
+    U: np.ndarray,
+    W: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    invert: Inverter = inverse,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The exact inverse by blocks (eq. 20), through the Schur complement of W:
 
@@ -83,13 +95,19 @@ def schur(
     (a particular solution, not the minimum-norm one). Error: none when W and K exist.
     (The OCR'd eq. 20 prints "U = -A^-1 B N" for L.)
     """
-    W_inv = inverse(W, "W")
-    arm = inverse(A - B @ W_inv @ U, "A - B W^-1 U") @ (v - B @ (W_inv @ omega))
+    W_inv = invert(W, "W")
+    arm = invert(A - B @ W_inv @ U, "A - B W^-1 U") @ (v - B @ (W_inv @ omega))
     return arm, W_inv @ (omega - U @ arm)
 
 
 def mca1(
-    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray, v: np.ndarray, omega: np.ndarray
+    A: np.ndarray,
+    B: np.ndarray,
+    U: np.ndarray,
+    W: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    invert: Inverter = inverse,
 ) -> tuple[np.ndarray, np.ndarray]:
     """First motion control algorithm (eq. 23-25): J^-1 with U taken as 0.
 
@@ -100,13 +118,19 @@ def mca1(
     e = Ω - Ω' = -U qdot_arm = -U A^-1 v + G Ω (eq. 30-31), G = U A^-1 B W^-1 (eq. 32).
     Exact when U = 0 (a Cartesian arm).
     """
-    A_inv, W_inv = inverse(A, "A"), inverse(W, "W")
+    A_inv, W_inv = invert(A, "A"), invert(W, "W")
     wrist = W_inv @ omega
     return A_inv @ (v - B @ wrist), wrist
 
 
 def mca2(
-    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray, v: np.ndarray, omega: np.ndarray
+    A: np.ndarray,
+    B: np.ndarray,
+    U: np.ndarray,
+    W: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    invert: Inverter = inverse,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Second motion control algorithm (eq. 22, 44-45): J^-1 with B taken as 0.
 
@@ -117,13 +141,19 @@ def mca2(
     e_v = v - v' = -B qdot_wrist = H v - B W^-1 Ω (eq. 48-49), H = B W^-1 U A^-1 (eq. 50).
     Exact when B = 0: the wrist axes meet at the TCP (eq. 22).
     """
-    A_inv, W_inv = inverse(A, "A"), inverse(W, "W")
+    A_inv, W_inv = invert(A, "A"), invert(W, "W")
     arm = A_inv @ v
     return arm, W_inv @ (omega - U @ arm)
 
 
 def mca3(
-    A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray, v: np.ndarray, omega: np.ndarray
+    A: np.ndarray,
+    B: np.ndarray,
+    U: np.ndarray,
+    W: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    invert: Inverter = inverse,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Third (general) motion control algorithm (eq. 21, 51-52): K ≈ A^-1, N ≈ W^-1.
 
@@ -132,7 +162,7 @@ def mca3(
 
     Error: e_v = H v (eq. 53) and e_Ω = G Ω (eq. 54).
     """
-    A_inv, W_inv = inverse(A, "A"), inverse(W, "W")
+    A_inv, W_inv = invert(A, "A"), invert(W, "W")
     return A_inv @ (v - B @ (W_inv @ omega)), W_inv @ (omega - U @ (A_inv @ v))
 
 

@@ -1,0 +1,237 @@
+"""What the control step does near a singular block (Barker 1983, "Singularities associated
+with M", "Generalized matrix inverse solution", "Variables held constant near singular
+points", "Choose which angle to rotate near singularity"), generalised to any partition.
+
+The blocks watched are the ones the algorithm inverts (:func:`measured_blocks`): J for exact
+and dls, A and W for the MCAs, W and J for Schur's form. Each is measured by its inverse
+condition number c = σ_r / σ_1 (:mod:`pinrate.solvers.conditioning`; J with its linear rows
+divided by the robot's characteristic length). A step is *in the singular region* when the
+least c is under ``slow_threshold``; there, ``singularity=`` decides:
+
+* ``"decelerate"`` (default): the generalized inverse's rates, scaled by
+  s = (c - singular_threshold) / (slow_threshold - singular_threshold) when the step would
+  lower c, and 0 (a halt) when the unscaled step would carry c under ``singular_threshold``.
+  A step that raises c is executed unscaled: the way out is always open (MoveIt Servo's
+  look-ahead, on the block actually inverted);
+* ``"generalized_inverse"``: Barker's M* (eq. 38, 44, 60) — each inversion by the
+  Moore-Penrose inverse with singular values under ``singular_threshold`` · σ_1 cut;
+* ``"freeze"`` (Barker's "variables held constant"): the joints that carry the lost
+  direction (those with at least :data:`FREEZE_SHARE` of the largest entry of the weakest
+  block's smallest right singular vector) hold still and the others serve the command, until
+  a step of all the joints would raise c;
+* ``"adaptive_dls"``: damped least squares with the damping raised as c falls,
+  λ = :data:`MAX_DAMPING` · sqrt(1 - (c / slow_threshold)²), relative to each block's σ_1
+  (Nakamura & Hanafusa 1986; Chiaverini 1997): the robust baseline.
+
+Wrist singularity (two wrist axes aligned: Barker θ5 = 0, UR5 wrist_2 = 0): W under
+``slow_threshold`` with its smallest right singular vector carried by two wrist joints (at
+least :data:`WRIST_PAIR_SHARE` of its square). ``wrist=`` then decides those two joints'
+rates, whatever ``singularity=`` is, by a change of variables of the wrist columns:
+
+* ``"split"``: the pair moves as one joint, each at the same rate (the sign matching the
+  axes' orientation): they share the rotation about the common axis equally, eq. 61 — at
+  exact alignment this is the Moore-Penrose solution of eq. 60;
+* ``"hold_first"``: the first joint of the pair (nearer the base) holds still and the last
+  takes the whole rotation, eq. 62;
+* ``"last_then_first"``: as ``hold_first`` until the last is held at a position limit, then
+  the first takes the rotation, eq. 63.
+
+The thresholds' defaults, measured on the UR5 (:data:`SLOW_THRESHOLD`): c(J) falls about as
+0.13 x the elbow angle near the elbow singularity, and c(W) as 0.5 x wrist_2 near the wrist
+singularity, so deceleration starts at about 0.15 rad from the elbow singularity and a step
+halts at about 0.04 rad; the wrist region starts at about 0.04 rad. At the median of
+uniformly drawn UR5 configurations c(J) is 0.066, c(A) 0.20 and c(W) 0.43.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError, choices_hint
+
+STRATEGIES = ("decelerate", "generalized_inverse", "freeze", "adaptive_dls")
+"""The values of ``Controller(singularity=...)``."""
+
+WRIST_STRATEGIES = ("split", "hold_first", "last_then_first")
+"""The values of ``Controller(wrist=...)``."""
+
+SLOW_THRESHOLD = 0.02
+"""c under which the step is in the singular region (κ = 50): deceleration starts here."""
+
+SINGULAR_THRESHOLD = 0.005
+"""c treated as singular (κ = 200): a decelerating step halts before it, the generalized
+inverse cuts singular values under this fraction of σ_1."""
+
+MAX_DAMPING = 0.02
+"""λ of ``adaptive_dls`` at c = 0, relative to the block's largest singular value: the
+largest rate gain along a lost direction is then 1 / (2 λ σ_1)."""
+
+FREEZE_SHARE = 0.5
+"""``freeze`` holds the joints whose entry in the weakest right singular vector is at least
+this fraction of the largest entry."""
+
+WRIST_PAIR_SHARE = 0.9
+"""A near-singular W is a wrist singularity when two joints carry at least this fraction of
+the square of its weakest right singular vector."""
+
+
+def check_strategy(value: object, valid: tuple[str, ...], what: str) -> str:
+    """The strategy name, or an InputError listing the valid ones."""
+    if not isinstance(value, str) or value not in valid:
+        raise InputError(f"unknown {what} {value!r}.{choices_hint(str(value), valid)}")
+    return value
+
+
+def check_thresholds(singular: object, slow: object) -> tuple[float, float]:
+    """(singular_threshold, slow_threshold) with 0 <= singular < slow <= 1, or an InputError."""
+    try:
+        singular_value, slow_value = float(singular), float(slow)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InputError(f"singular_threshold and slow_threshold must be numbers, got {singular!r}, {slow!r}") from None
+    if not (0.0 <= singular_value < slow_value <= 1.0):
+        raise InputError(
+            "the thresholds must satisfy 0 <= singular_threshold < slow_threshold <= 1 (inverse condition "
+            f"numbers σ_min/σ_max), got singular_threshold={singular_value}, slow_threshold={slow_value}"
+        )
+    return singular_value, slow_value
+
+
+def measured_blocks(algorithm: str) -> tuple[str, ...]:
+    """The blocks ``algorithm`` inverts: ("J",) for exact and dls, ("W", "J") for schur (W
+    and the complement, whose determinant is det J / det W), ("A", "W") for the MCAs."""
+    if algorithm in ("exact", "dls"):
+        return ("J",)
+    if algorithm == "schur":
+        return ("W", "J")
+    return ("A", "W")
+
+
+def block_of(name: str, J: np.ndarray, m: int, n_arm: int, scale: np.ndarray) -> np.ndarray:
+    """Block ``name`` of J (m + k, n) in partition order: "A", "W", or "J" with its rows scaled."""
+    if name == "A":
+        return J[:m, :n_arm]
+    if name == "W":
+        return J[m:, n_arm:]
+    return J * scale[:, None]
+
+
+@dataclass(frozen=True)
+class Conditioning:
+    """The least inverse condition number c among the measured blocks, which block it is, and
+    that block's weakest joint motion: its smallest right singular vector, spread over the
+    partition's columns (n,) with 0 outside the block."""
+
+    value: float
+    block: str
+    direction: np.ndarray
+
+
+def conditioning(
+    J: np.ndarray, m: int, n_arm: int, blocks: tuple[str, ...], scale: np.ndarray, ranks: dict[str, int]
+) -> Conditioning:
+    """The least c = σ_r / σ_1 over ``blocks`` of J (m + k, n) (SVDs); ``ranks`` caps r at each
+    block's generic rank, so directions a block can never span do not count."""
+    n = J.shape[1]
+    worst = Conditioning(1.0, blocks[0], np.zeros(n))
+    for name in blocks:
+        M = block_of(name, J, m, n_arm, scale)
+        if M.size == 0:
+            continue
+        rank = min(min(M.shape), ranks.get(name, n))
+        if rank == 0:
+            continue
+        _, singular_values, right_t = np.linalg.svd(M)
+        value = float(singular_values[rank - 1] / singular_values[0]) if singular_values[0] > 0.0 else 0.0
+        if value < worst.value:
+            direction = np.zeros(n)
+            columns = slice(0, n_arm) if name == "A" else slice(n_arm, n) if name == "W" else slice(0, n)
+            direction[columns] = right_t[rank - 1]
+            worst = Conditioning(value, name, direction)
+    return worst
+
+
+def wrist_pair(weakest: Conditioning, n_arm: int) -> tuple[int, int, float] | None:
+    """(i, j, sign) when the weakest motion is carried by two wrist joints i < j (partition
+    positions; at least :data:`WRIST_PAIR_SHARE` of its square): two wrist axes aligned, whose
+    opposite turning does nothing. ``sign`` = ±1 makes rate_j = sign x rate_i the motion in
+    which both turn the hand the same way about the common axis. None otherwise."""
+    direction = weakest.direction
+    if direction.size < 2:
+        return None
+    order = np.argsort(-np.abs(direction))
+    i, j = sorted(int(position) for position in order[:2])
+    if i < n_arm or direction[i] ** 2 + direction[j] ** 2 < WRIST_PAIR_SHARE:
+        return None
+    return i, j, -1.0 if direction[i] * direction[j] > 0.0 else 1.0
+
+
+def carrying_joints(weakest: Conditioning) -> frozenset[int]:
+    """Partition positions that carry the weakest motion: at least :data:`FREEZE_SHARE` of
+    the largest entry of the weakest block's smallest right singular vector."""
+    magnitudes = np.abs(weakest.direction)
+    if not magnitudes.any():
+        return frozenset()
+    return frozenset(np.flatnonzero(magnitudes >= FREEZE_SHARE * magnitudes.max()).tolist())
+
+
+def adaptive_damping(value: float, slow_threshold: float) -> float:
+    """λ = MAX_DAMPING · sqrt(1 - (c / slow)²) for c < slow, else 0 (relative to σ_1)."""
+    if value >= slow_threshold:
+        return 0.0
+    return MAX_DAMPING * math.sqrt(1.0 - (value / slow_threshold) ** 2)
+
+
+def deceleration(value: float, singular_threshold: float, slow_threshold: float) -> float:
+    """s = (c - singular) / (slow - singular), clipped to [0, 1]: the command's scale at c."""
+    return min(1.0, max(0.0, (value - singular_threshold) / (slow_threshold - singular_threshold)))
+
+
+@dataclass(frozen=True)
+class ColumnMap:
+    """A change of the partition's rate variables: partition rates = matrix @ y.
+
+    ``matrix`` is (n_partition, n_reduced); the first ``n_arm`` entries of y are arm joints
+    (arm columns are only ever dropped, never merged with another)."""
+
+    matrix: np.ndarray
+    n_arm: int
+
+    @classmethod
+    def of(cls, n_arm: int, n_wrist: int, dropped: frozenset[int], merged: tuple[int, int, float] | None) -> ColumnMap:
+        """Columns kept one by one, less ``dropped`` (partition positions); ``merged`` (i, j,
+        sign) in partition positions moves j at sign x i's rate, as one variable."""
+        n = n_arm + n_wrist
+        columns: list[np.ndarray] = []
+        kept_arm = 0
+        pair = merged if merged and merged[0] not in dropped and merged[1] not in dropped else None
+        for position in range(n):
+            if position in dropped or (pair and position == pair[1]):
+                continue
+            column = np.zeros(n)
+            column[position] = 1.0
+            if pair and position == pair[0]:
+                column[pair[1]] = pair[2]
+            columns.append(column)
+            kept_arm += position < n_arm
+        matrix = np.array(columns).T if columns else np.zeros((n, 0))
+        return cls(matrix, kept_arm)
+
+
+__all__ = [
+    "MAX_DAMPING",
+    "SINGULAR_THRESHOLD",
+    "SLOW_THRESHOLD",
+    "STRATEGIES",
+    "WRIST_STRATEGIES",
+    "ColumnMap",
+    "Conditioning",
+    "adaptive_damping",
+    "carrying_joints",
+    "conditioning",
+    "deceleration",
+    "measured_blocks",
+    "wrist_pair",
+]
