@@ -433,7 +433,7 @@ class Controller:
             if status is not Status.OK:
                 rates = rates * scale
                 statuses.append(status)
-                details.append(detail)
+                details.append(detail)  # NEAR_SINGULARITY: a way out, scale 1
         scale = self._rate_scale(rates)
         if scale < 1.0:
             rates = rates * scale
@@ -546,7 +546,8 @@ class Controller:
                 columns, dropped, merged, released_by, generalized, weakest.value, weakest.block, False, (), (), ()
             )
             free = self._solve_planned(observation, twist, plan, frozenset())
-            if self._lookahead(observation, free, columns) <= weakest.value:
+            ahead, crossed = self._lookahead(observation, free, columns)
+            if crossed or ahead <= weakest.value:  # the free step would not raise c: freeze
                 carrying = {
                     position
                     for variable in carrying_joints(weakest)
@@ -557,6 +558,9 @@ class Controller:
                 columns = ColumnMap.of(n_arm, n_wrist, dropped, merged)
                 statuses.append(Status.FROZEN)
                 details.append(f"{where}: {', '.join(frozen)} held still")
+            else:
+                statuses.append(Status.NEAR_SINGULARITY)
+                details.append(f"{where}: the step of all joints raises c, none frozen")
         return _Plan(
             columns,
             dropped,
@@ -618,7 +622,9 @@ class Controller:
         where = f"block {block} near singular (c = {min(value, ahead):.2g})"
         crossed = crossed and value >= self.singular_threshold  # sign(det) next to det = 0 is noise
         if ahead > value and not crossed:
-            return 1.0, Status.OK, ""
+            if value >= self.slow_threshold:
+                return 1.0, Status.OK, ""
+            return 1.0, Status.NEAR_SINGULARITY, f"{where}: the step raises c, executed unscaled"
         if crossed or ahead < self.singular_threshold:
             return 0.0, Status.HALT_FOR_SINGULARITY, f"{where}: halted, the step would make it singular"
         scale = deceleration(min(value, ahead), self.singular_threshold, self.slow_threshold)

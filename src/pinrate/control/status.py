@@ -11,8 +11,9 @@ class Status(str, Enum):
     Two members are pinrate's own: ``TWIST_SATURATED``, the commanded twist was scaled down
     to the controller's TCP speed limits (direction kept) before any joint rate was solved;
     ``NEAR_SINGULARITY``, a block the algorithm inverts is in the singular region and the
-    generalized or damped inverse (``singularity="generalized_inverse"`` or
-    ``"adaptive_dls"``) solved it: the motion goes on, less exactly than commanded.
+    motion goes on: solved by the generalized or damped inverse
+    (``singularity="generalized_inverse"`` or ``"adaptive_dls"``), or, with ``"decelerate"``,
+    a step that raises the conditioning and is executed unscaled.
     """
 
     OK = "ok"
