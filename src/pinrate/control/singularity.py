@@ -51,6 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, choices_hint
+from ..solvers.conditioning import inverse_condition
 
 STRATEGIES = ("decelerate", "generalized_inverse", "freeze", "adaptive_dls")
 """The values of ``Controller(singularity=...)``."""
@@ -143,12 +144,11 @@ def conditioning(
         rank = min(min(M.shape), ranks.get(name, n))
         if rank == 0:
             continue
-        _, singular_values, right_t = np.linalg.svd(M)
-        value = float(singular_values[rank - 1] / singular_values[0]) if singular_values[0] > 0.0 else 0.0
+        value, motion = inverse_condition(M, rank)
         if value < worst.value:
             direction = np.zeros(n)
             columns = slice(0, n_arm) if name == "A" else slice(n_arm, n) if name == "W" else slice(0, n)
-            direction[columns] = right_t[rank - 1]
+            direction[columns] = motion
             worst = Conditioning(value, name, direction)
     return worst
 

@@ -30,22 +30,6 @@ import numpy as np
 from ..errors import InputError
 
 
-def inverse_condition(M: np.ndarray, rank: int | None = None) -> float:
-    """σ_r / σ_1 of M (dimensionless, in [0, 1]); r = ``rank`` or min(M.shape).
-
-    1.0 for an empty block or a rank of 0 (nothing to lose); 0.0 for a zero or non-finite M.
-    """
-    r = min(M.shape) if rank is None else rank
-    if M.size == 0 or r == 0:
-        return 1.0
-    if not np.isfinite(M).all():
-        return 0.0
-    singular_values = np.linalg.svd(M, compute_uv=False)
-    if singular_values[0] == 0.0:
-        return 0.0
-    return float(singular_values[r - 1] / singular_values[0])
-
-
 def inverse_condition_bound(M: np.ndarray | list[list[float]], M_inverse: np.ndarray | list[list[float]]) -> float:
     """1 / (||M||_F ||M^-1||_F), a lower bound of :func:`inverse_condition` for a square M.
 
@@ -101,17 +85,13 @@ def truncated_pinv(M: np.ndarray, threshold: float) -> np.ndarray:
     return (right_t.T * inverted) @ left.T
 
 
-def weakest_direction(M: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-    """(c, u, v): the inverse condition number σ_n / σ_1 of M, and its left and right
-    singular vectors for σ_min: u is the task direction M moves least (unit, in M's row
-    space), v the joint-rate combination that produces least (unit, in M's column space).
-
-    M must be non-empty; for a wide M (rows < columns) σ_min is σ_rows.
-    """
-    left, singular_values, right_t = np.linalg.svd(M)
-    last = min(M.shape) - 1
-    value = 0.0 if singular_values[0] == 0.0 else float(singular_values[last] / singular_values[0])
-    return value, left[:, last], right_t[last]
+def inverse_condition(M: np.ndarray, rank: int) -> tuple[float, np.ndarray]:
+    """(c, v): c = σ_rank / σ_1 of a non-empty M (dimensionless, in [0, 1]; 0.0 for a zero M),
+    and v, its right singular vector number ``rank``: the joint motion M produces least,
+    unit, over M's columns."""
+    _, singular_values, right_t = np.linalg.svd(M)
+    value = float(singular_values[rank - 1] / singular_values[0]) if singular_values[0] > 0.0 else 0.0
+    return value, right_t[rank - 1]
 
 
 __all__ = [
@@ -120,5 +100,4 @@ __all__ = [
     "inverse_condition_bound",
     "row_scale",
     "truncated_pinv",
-    "weakest_direction",
 ]
