@@ -66,6 +66,7 @@ class Robot:
         joint_names: the moving joints, in velocity-vector order.
         reference_configurations: named configurations (from the SRDF, plus ``"home"``).
         home_choice: where :meth:`home` comes from (a reference, an SRDF state, a search, neutral).
+        srdf_path: the SRDF read with the URDF (its disabled collision pairs, its poses), or None.
     """
 
     def __init__(
@@ -80,6 +81,7 @@ class Robot:
         package_dirs: Sequence[str] = (),
         reference_configurations: Mapping[str, np.ndarray] | None = None,
         mimic: Mapping[str, str] | None = None,
+        srdf_path: Path | None = None,
     ) -> None:
         if not isinstance(model, pin.Model):
             raise InputError(f"model must be a pinocchio.Model (or use pinrate.load), not {type(model).__name__}")
@@ -94,7 +96,8 @@ class Robot:
         self._urdf_path = urdf_path
         self._urdf_text = urdf_text
         self._package_dirs = list(package_dirs)
-        self._visual_model: pin.GeometryModel | None = None
+        self.srdf_path = srdf_path if srdf_path is not None and srdf_path.is_file() else None
+        self._geometry: dict[pin.GeometryType, pin.GeometryModel] = {}
         self.joint_names: tuple[str, ...] = tuple(
             model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0
         )
@@ -348,24 +351,31 @@ class Robot:
         jacobian[3:] = sensor_R_tip @ jacobian_local[3:]
         return jacobian, world_T_tip, world_T_sensor
 
-    # ------------------------------------------------------------------ visuals
+    # ------------------------------------------------------------------ geometry
     @property
     def visual_model(self) -> pin.GeometryModel:
         """Visual geometries, loaded on first use; an empty model (with a warning) on failure."""
-        if self._visual_model is None:
-            self._visual_model = self._load_visuals()
-        return self._visual_model
+        return self._geometry_model(pin.GeometryType.VISUAL)
 
-    def _load_visuals(self) -> pin.GeometryModel:
+    @property
+    def collision_model(self) -> pin.GeometryModel:
+        """Collision geometries (the URDF's ``<collision>`` elements), loaded on first use; an
+        empty model (with a warning) on failure. No pairs are set: see
+        :mod:`pinrate.control.collision`."""
+        return self._geometry_model(pin.GeometryType.COLLISION)
+
+    def _geometry_model(self, kind: pin.GeometryType) -> pin.GeometryModel:
+        if kind not in self._geometry:
+            self._geometry[kind] = self._load_geometry(kind)
+        return self._geometry[kind]
+
+    def _load_geometry(self, kind: pin.GeometryType) -> pin.GeometryModel:
+        what = "visual" if kind == pin.GeometryType.VISUAL else "collision"
         try:
             if self._urdf_path is None and self._urdf_text is not None:
-                return pin.buildGeomFromUrdfString(
-                    self.model, self._urdf_text, pin.GeometryType.VISUAL, package_dirs=self._package_dirs
-                )
+                return pin.buildGeomFromUrdfString(self.model, self._urdf_text, kind, package_dirs=self._package_dirs)
             if self._urdf_path is not None:
-                return pin.buildGeomFromUrdf(
-                    self.model, str(self._urdf_path), pin.GeometryType.VISUAL, package_dirs=self._package_dirs
-                )
+                return pin.buildGeomFromUrdf(self.model, str(self._urdf_path), kind, package_dirs=self._package_dirs)
         except (RuntimeError, ValueError, OSError) as error:
-            warnings.warn(f"{self.name}: visual meshes not loaded ({error}); kinematics unaffected", stacklevel=2)
+            warnings.warn(f"{self.name}: {what} meshes not loaded ({error}); kinematics unaffected", stacklevel=3)
         return pin.GeometryModel()

@@ -231,6 +231,7 @@ def robot_from_urdf(
         package_dirs=package_dirs,
         reference_configurations=references,
         mimic=mimic_joints(root),
+        srdf_path=srdf_path,
     )
     if search_home:
         states = srdf_states(srdf_path) if srdf_path is not None and srdf_path.is_file() else []
