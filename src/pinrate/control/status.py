@@ -14,6 +14,12 @@ class Status(str, Enum):
     motion goes on: solved by the generalized or damped inverse
     (``singularity="generalized_inverse"`` or ``"adaptive_dls"``), or, with ``"decelerate"``,
     a step that raises the conditioning and is executed unscaled.
+
+    Two more rank the self-collision monitor's verdicts (:mod:`pinrate.control.collision`):
+    ``DECELERATE_FOR_COLLISION``, the nearest pair of links is closer than the safety distance
+    and the step, which brings them closer, is scaled down (just above
+    DECELERATE_FOR_SINGULARITY); ``HALT_FOR_COLLISION``, the step would bring a pair within
+    the stop distance and is not executed (the most severe: a halt that protects hardware).
     """
 
     OK = "ok"
@@ -23,9 +29,11 @@ class Status(str, Enum):
     WRIST_SINGULARITY = "wrist_singularity"
     NEAR_SINGULARITY = "near_singularity"
     DECELERATE_FOR_SINGULARITY = "decelerate_for_singularity"
+    DECELERATE_FOR_COLLISION = "decelerate_for_collision"
     AUXILIARY_ELBOW = "auxiliary_elbow"
     FROZEN = "frozen"
     HALT_FOR_SINGULARITY = "halt_for_singularity"
+    HALT_FOR_COLLISION = "halt_for_collision"
 
     @property
     def severity(self) -> int:
@@ -35,8 +43,8 @@ class Status(str, Enum):
 
 SEVERITY: tuple[Status, ...] = tuple(Status)
 """Statuses from the least to the most severe: OK < TWIST_SATURATED < RATE_LIMITED <
-JOINT_LIMIT < WRIST_SINGULARITY < NEAR_SINGULARITY < DECELERATE_FOR_SINGULARITY < AUXILIARY_ELBOW < FROZEN <
-HALT_FOR_SINGULARITY."""
+JOINT_LIMIT < WRIST_SINGULARITY < NEAR_SINGULARITY < DECELERATE_FOR_SINGULARITY <
+DECELERATE_FOR_COLLISION < AUXILIARY_ELBOW < FROZEN < HALT_FOR_SINGULARITY < HALT_FOR_COLLISION."""
 
 
 def most_severe(*statuses: Status) -> Status:
