@@ -47,6 +47,7 @@ from ..solvers.generalized import damped_inverter, filtered_rates, generalized_i
 from ..solvers.rates import partition_rates, partition_spectral_radius
 from ..solvers.reference import Inverter
 from ..solvers.registry import check_algorithm
+from .elbow import ELBOW_REGION, EXTENDED, Elbow, arm_frame, elbow_rate, find_elbow, remaining_rates
 from .singularity import (
     SINGULAR_THRESHOLD,
     SLOW_THRESHOLD,
@@ -194,6 +195,25 @@ class _Plan(NamedTuple):
     frozen: tuple[str, ...]
 
 
+class _Auxiliary(NamedTuple):
+    """A step under Barker's auxiliary elbow control (:mod:`.elbow`)."""
+
+    bend: float  # elbow - straight (rad)
+    outward: float  # the command's component along the upper arm (m/s)
+    directions: np.ndarray  # p and, when commanded, n: world directions over the sensor's linear axes (r, m)
+    targets: np.ndarray  # TVEL along them (m/s)
+    dropped: frozenset[int]  # the wrist rule's held joint
+    merged: tuple[int, int, float] | None
+    released_by: tuple[int, int] | None
+    statuses: tuple[Status, ...]
+    details: tuple[str, ...]
+
+
+CONTROLLED_SHARE = 0.5
+"""A world direction counts as commanded when the partition's linear components carry at
+least this share of it (a planar arm's twist has no component normal to its plane)."""
+
+
 class Controller:
     """The resolved-rate control step of a robot (one Robot per controller and thread).
 
@@ -215,6 +235,11 @@ class Controller:
             is in the singular region, under ``singular`` a block counts as singular.
         max_linear_speed, max_angular_speed: saturation of the commanded twist (m/s, rad/s;
             inf for none).
+        elbow_region: rad; with ``singularity="auxiliary_elbow"``, Barker's elbow control acts
+            while the elbow is closer than this to full extension (:mod:`.elbow`). None: the
+            bend at which c of the measured block reaches ``slow_threshold`` at home (the
+            elbow's whole singular region; 0.15 rad on the UR5), at most
+            :data:`~pinrate.control.elbow.ELBOW_REGION`.
 
     Raises:
         InputError: an unknown algorithm or strategy (the message lists the valid ones), a
@@ -237,6 +262,7 @@ class Controller:
         slow_threshold: float = SLOW_THRESHOLD,
         max_linear_speed: float = MAX_LINEAR_SPEED,
         max_angular_speed: float = MAX_ANGULAR_SPEED,
+        elbow_region: float | None = None,
     ) -> None:
         self.robot = robot
         self.algorithm = check_algorithm(algorithm)
@@ -268,6 +294,41 @@ class Controller:
         ranks = generic_ranks(robot, self.partition)
         self._ranks = {"J": ranks[0], "A": ranks[1], "W": ranks[2]}
         self._square_j = index.rows.size == index.columns.size == ranks[0]
+        self.elbow: Elbow | None = None
+        """The arm's elbow and shoulder when ``singularity="auxiliary_elbow"`` found one."""
+        self.elbow_region = 0.0 if elbow_region is None else check_positive(elbow_region, "elbow_region")
+        if self.singularity == "auxiliary_elbow":
+            self._elbow_data = robot.model.createData()
+            self.elbow = find_elbow(robot, self.partition, self._singular_with)
+            if self.elbow is not None:
+                bent = float(robot.home()[self.elbow.q_index]) - self.elbow.straight
+                self._bend_sign = -1.0 if bent < 0.0 else 1.0  # the first bend goes the home's way
+                if elbow_region is None:
+                    self.elbow_region = self._slow_bend(self.elbow)
+
+    def _slow_bend(self, elbow: Elbow) -> float:
+        """The bend from full extension (rad, toward home's side, others at home) at which c of
+        the measured blocks reaches ``slow_threshold``, by bisection; at most ELBOW_REGION."""
+        q = self.robot.home()
+        sense = self._bend_sign
+
+        def slow_at(bend: float) -> bool:
+            q[elbow.q_index] = elbow.straight + sense * bend
+            return self.conditioning(q).value < self.slow_threshold
+
+        if slow_at(ELBOW_REGION):
+            return ELBOW_REGION
+        low, high = 0.0, ELBOW_REGION
+        for _ in range(30):
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if slow_at(middle) else (low, middle)
+        return high
+
+    def _singular_with(self, q: np.ndarray, position: int) -> bool:
+        """Whether a measured block is singular at q with the joint at ``position`` carrying
+        the lost motion."""
+        weakest = self.conditioning(q)
+        return weakest.value < self.singular_threshold and position in carrying_joints(weakest)
 
     def _position_limits(self) -> list[_Limit]:
         """The partition's 1-DOF joints with finite position limits."""
@@ -396,9 +457,17 @@ class Controller:
         statuses = [Status.TWIST_SATURATED] if saturated else []
         details: list[str] = []
         bound = self._conditioning_bound(observation)
-        plan = self._plan(observation, twist) if bound < self.slow_threshold else None
+        auxiliary = self._auxiliary(observation, twist) if self.elbow is not None else None
+        plan = self._plan(observation, twist) if auxiliary is None and bound < self.slow_threshold else None
         frozen: tuple[str, ...] = ()
-        if plan is None:
+        if auxiliary is not None:
+
+            def solve(left_out: frozenset[str]) -> np.ndarray:
+                return self._solve_auxiliary(observation, twist, auxiliary, left_out)
+
+            statuses.extend(auxiliary.statuses)
+            details.extend(auxiliary.details)
+        elif plan is None:
 
             def solve(left_out: frozenset[str]) -> np.ndarray:
                 return self._solve_without(observation, twist, left_out)
@@ -425,7 +494,7 @@ class Controller:
                 statuses.append(Status.JOINT_LIMIT)
                 details.append(f"held at a position limit: {', '.join(blocked)}")
                 frozen = frozen + tuple(name for name in blocked if name not in frozen)
-        watched = self._watched(observation, plan, bound, rates)
+        watched = None if auxiliary is not None else self._watched(observation, plan, bound, rates)
         if watched is not None:
             scale, status, detail = self._decelerate(observation, rates, *watched)
             if status is Status.HALT_FOR_SINGULARITY:
@@ -440,6 +509,8 @@ class Controller:
             statuses.append(Status.RATE_LIMITED)
             details.append(f"rates scaled by {scale:.3g} to meet the velocity limits")
         next_q = self.robot.integrate(observation.q, rates, self.dt)
+        if auxiliary is not None:
+            self._reach_extension(auxiliary.bend, rates, next_q)
         if self.position_limits:
             hit = self._clamp(next_q)
             if hit and Status.JOINT_LIMIT not in statuses:
@@ -470,7 +541,7 @@ class Controller:
         under :data:`WATCH_FACTOR` x slow) that moves some joint more than
         :data:`WATCHED_STEP` rad, which could enter the region or cross a singularity in one
         step (a servo's big steps do). None otherwise."""
-        if self.singularity != "decelerate":
+        if self.singularity not in ("decelerate", "auxiliary_elbow"):
             return None
         if plan is not None:
             return (plan.columns, plan.value, plan.block) if plan.decelerate else None
@@ -496,19 +567,11 @@ class Controller:
         details: list[str] = []
         dropped: frozenset[int] = frozenset()
         merged = released_by = None
-        pair = wrist_pair(weakest, n_arm)
-        if pair is not None:
-            first, last, _ = pair
-            names = f"{self._names[first]} and {self._names[last]}"
-            if self.wrist == "split":
-                merged = pair
-                how = "they share the rotation about the common axis"
-            else:
-                dropped = frozenset([first])
-                released_by = (first, last) if self.wrist == "last_then_first" else None
-                how = f"{self._names[first]} holds, {self._names[last]} takes the rotation"
+        rule = self._wrist_rule(weakest, n_arm)
+        if rule is not None:
+            dropped, merged, released_by, detail = rule
             statuses.append(Status.WRIST_SINGULARITY)
-            details.append(f"wrist axes of {names} aligned (c({weakest.block}) = {weakest.value:.2g}): {how}")
+            details.append(detail)
             columns = ColumnMap.of(n_arm, n_wrist, dropped, merged)
             weakest = self._conditioning(reduced @ columns.matrix, columns.n_arm)
         generalized = generalized_inverter(self.singular_threshold)
@@ -530,7 +593,7 @@ class Controller:
         where = f"block {weakest.block} near singular (c = {weakest.value:.2g} < {self.slow_threshold:g})"
         frozen: tuple[str, ...] = ()
         invert, decelerate = generalized, False
-        if self.singularity == "decelerate":
+        if self.singularity in ("decelerate", "auxiliary_elbow"):  # outside the elbow's region
             decelerate = True
         elif self.singularity == "generalized_inverse":
             statuses.append(Status.NEAR_SINGULARITY)
@@ -573,6 +636,126 @@ class Controller:
             tuple(statuses),
             tuple(details),
             frozen,
+        )
+
+    def _auxiliary(self, observation: Observation, twist: np.ndarray) -> _Auxiliary | None:
+        """Barker's auxiliary elbow control at this q, or None: the elbow is outside its region,
+        or the upper arm's direction is not among the commanded linear components."""
+        elbow = self.elbow
+        assert elbow is not None
+        q = observation.q
+        bend = float(q[elbow.q_index]) - elbow.straight
+        if abs(bend) >= self.elbow_region:
+            return None
+        pin.forwardKinematics(self.robot.model, self._elbow_data, q)
+        frame = arm_frame(elbow, self._elbow_data, np.array(observation.world_T_tip.translation))
+        if frame is None:
+            return None
+        index = self.index
+        m = index.m
+        sensor_rotation = observation.world_T_sensor.rotation
+        axes = index.rows[:m]  # the sensor's linear axes the twist commands
+        commanded = sensor_rotation[:, axes]  # their world directions (3, m)
+        if np.linalg.norm(commanded.T @ frame.outward) < CONTROLLED_SHARE:
+            return None
+        world_linear = commanded @ twist[:m]  # TVEL in the world (m/s)
+        directions = [
+            world for world in (frame.pitch, frame.normal) if np.linalg.norm(commanded.T @ world) >= CONTROLLED_SHARE
+        ]
+        n_arm = index.arm_columns.size
+        dropped: frozenset[int] = frozenset()
+        merged = released_by = None
+        statuses = [Status.AUXILIARY_ELBOW]
+        outward = float(frame.outward @ world_linear)
+        way = "retracts" if outward < 0.0 else "straightens" if abs(bend) > EXTENDED else "holds (outward command)"
+        details = [f"{elbow.joint} {abs(bend):.3g} rad from full extension: auxiliary elbow control, the elbow {way}"]
+        if index.wrist_columns.size >= 2:
+            wrist = conditioning(self._reduced(observation.jacobian), m, n_arm, ("W",), self._row_scale, self._ranks)
+            rule = self._wrist_rule(wrist, n_arm) if wrist.value < self.slow_threshold else None
+            if rule is not None:
+                dropped, merged, released_by, detail = rule
+                statuses.append(Status.WRIST_SINGULARITY)
+                details.append(detail)
+        return _Auxiliary(
+            bend,
+            outward,
+            np.array([commanded.T @ world for world in directions]).reshape(len(directions), m),
+            np.array([float(world @ world_linear) for world in directions]),
+            dropped,
+            merged,
+            released_by,
+            tuple(statuses),
+            tuple(details),
+        )
+
+    def _solve_auxiliary(
+        self, observation: Observation, twist: np.ndarray, auxiliary: _Auxiliary, left_out: frozenset[str]
+    ) -> np.ndarray:
+        """Rates (nv,) under auxiliary elbow control: the elbow by eq. 45; the shoulder and the
+        other joints (less ``left_out`` and the wrist rule's held joint) by the generalized
+        inverse of the pitch row (eq. 46's coefficients for shoulder and elbow), the normal
+        row and the angular rows, less what the elbow produces there (:mod:`.elbow`)."""
+        elbow = self.elbow
+        assert elbow is not None
+        index = self.index
+        m = index.m
+        partition_rates = np.zeros(index.columns.size)
+        if elbow.joint not in left_out:
+            partition_rates[elbow.position] = elbow_rate(
+                elbow, auxiliary.bend, self._bend_sign, auxiliary.outward, self.elbow_region, self.dt
+            )
+        dropped = auxiliary.dropped | {self._positions[name] for name in left_out}
+        if auxiliary.released_by is not None and auxiliary.released_by[1] in dropped:
+            dropped = dropped - {auxiliary.released_by[0]}
+        columns = ColumnMap.of(
+            index.arm_columns.size, index.wrist_columns.size, dropped | {elbow.position}, auxiliary.merged
+        )
+        reduced = self._reduced(observation.jacobian)
+        linear = auxiliary.directions @ reduced[:m]  # velocities along p (and n) per joint rate
+        length = self.characteristic_length  # linear rows in m/L, as the generalized inverse's rows
+        matrix = np.vstack([linear / length, reduced[m:]])
+        target = np.concatenate([auxiliary.targets / length, twist[m:]])
+        partition_rates += remaining_rates(
+            matrix, target - matrix @ partition_rates, columns.matrix, self.singular_threshold
+        )
+        rates = np.zeros(self.robot.nv)
+        rates[index.columns] = partition_rates
+        return rates
+
+    def _reach_extension(self, bend: float, rates: np.ndarray, next_q: np.ndarray) -> None:
+        """After a step under auxiliary elbow control: a step that ends at full extension puts
+        the elbow exactly there, and the next bend from it goes the other way."""
+        elbow = self.elbow
+        assert elbow is not None
+        after = bend + float(rates[self.index.columns[elbow.position]]) * self.dt
+        if abs(bend) > EXTENDED and (abs(after) <= EXTENDED or after * bend < 0.0):
+            next_q[elbow.q_index] = elbow.straight
+            self._bend_sign = -math.copysign(1.0, bend)
+
+    def _wrist_rule(
+        self, weakest: Conditioning, n_arm: int
+    ) -> tuple[frozenset[int], tuple[int, int, float] | None, tuple[int, int] | None, str] | None:
+        """(dropped, merged, released_by, detail) of the ``wrist=`` rule when the weakest
+        motion is a wrist pair's (two aligned axes), else None."""
+        pair = wrist_pair(weakest, n_arm)
+        if pair is None:
+            return None
+        first, last, _ = pair
+        names = f"{self._names[first]} and {self._names[last]}"
+        dropped: frozenset[int] = frozenset()
+        merged = released_by = None
+        if self.wrist == "split":
+            merged = pair
+            how = "they share the rotation about the common axis"
+        else:
+            dropped = frozenset([first])
+            released_by = (first, last) if self.wrist == "last_then_first" else None
+            how = f"{self._names[first]} holds, {self._names[last]} takes the rotation"
+        return (
+            dropped,
+            merged,
+            released_by,
+            f"wrist axes of {names} aligned (c({weakest.block}) = {weakest.value:.2g}): {how}",
         )
 
     def _solve_planned(

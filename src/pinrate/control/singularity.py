@@ -19,6 +19,11 @@ least c is under ``slow_threshold``; there, ``singularity=`` decides:
   direction (those with at least :data:`FREEZE_SHARE` of the largest entry of the weakest
   block's smallest right singular vector) hold still and the others serve the command, until
   a step of all the joints would raise c;
+* ``"auxiliary_elbow"`` (Barker eq. 45-46, :mod:`pinrate.control.elbow`): while the elbow
+  is within ``elbow_region`` of full extension, the elbow follows the command's component
+  along the upper arm (the impossible outward one ignored), the shoulder retracts the hand
+  on the line to the shoulder and pitches the arm, the other joints serve the rest; elsewhere
+  as ``"decelerate"``;
 * ``"adaptive_dls"``: damped least squares with the damping raised as c falls,
   λ = :data:`MAX_DAMPING` · sqrt(1 - (c / slow_threshold)²), relative to each block's σ_1
   (Nakamura & Hanafusa 1986; Chiaverini 1997): the robust baseline.
@@ -53,7 +58,7 @@ import numpy as np
 from ..errors import InputError, choices_hint
 from ..solvers.conditioning import inverse_condition
 
-STRATEGIES = ("decelerate", "generalized_inverse", "freeze", "adaptive_dls")
+STRATEGIES = ("decelerate", "generalized_inverse", "freeze", "auxiliary_elbow", "adaptive_dls")
 """The values of ``Controller(singularity=...)``."""
 
 WRIST_STRATEGIES = ("split", "hold_first", "last_then_first")

@@ -1,0 +1,171 @@
+"""Barker's auxiliary elbow control (eq. 45-46) against the paper's closed forms written
+here: the upper arm's axes X2, Y2 from R_2^1 R_1^0 (eq. B25-B29, re-derived: the OCR'd B28-B29
+misplace a bracket), F1 from eq. 27; and on the UR5, the hand retracting toward the shoulder."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pinrate
+from pinrate import Controller, InputError, Status
+
+UNLIMITED = {"velocity_limits": np.inf, "position_limits": False}
+
+
+def barker_axes(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(X2, Y2, normal) in base axes: rows of R_2^1 R_1^0 (eq. B25-B27), and X2 x Y2."""
+    C1, S1, C2, S2 = math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1])
+    R10 = np.array([[-C1, -S1, 0.0], [0.0, 0.0, 1.0], [-S1, C1, 0.0]])  # eq. B25
+    R21 = np.array([[-S2, C2, 0.0], [-C2, -S2, 0.0], [0.0, 0.0, 1.0]])  # eq. B26
+    x2, y2, _ = R21 @ R10
+    return x2, y2, np.cross(x2, y2)
+
+
+def barker_at_extension(theta1: float, theta2: float) -> np.ndarray:
+    return np.array([theta1, theta2, 0.0, 0.3, 0.6, -0.2])
+
+
+def twist_for(
+    robot: pinrate.Robot, q: np.ndarray, base_velocity: np.ndarray, angular: np.ndarray | None = None
+) -> np.ndarray:
+    """The twist in the hand's axes that commands ``base_velocity`` (TVEL in base axes)."""
+    hand = robot.frame_pose(q, "hand")[:3, :3]
+    return np.concatenate([hand.T @ base_velocity, np.zeros(3) if angular is None else angular])
+
+
+@pytest.mark.parametrize("theta1, theta2", [(0.3, 0.4), (-1.1, 1.2), (2.0, -0.7)])
+def test_barker_eq_45_46_at_full_extension(theta1: float, theta2: float) -> None:
+    robot = pinrate.robots.barker_arm()
+    parameters = pinrate.robots.parameters("barker_arm")
+    es, we = parameters["es"], parameters["we"]
+    controller = Controller(robot, singularity="auxiliary_elbow", **UNLIMITED)
+    assert (controller.elbow.joint, controller.elbow.shoulder) == ("theta3", "theta2")
+    q = barker_at_extension(theta1, theta2)
+    x2, y2, _ = barker_axes(q)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        along_x2, along_y2 = rng.normal(size=2) * 0.05
+        step = controller.step(q, twist_for(robot, q, along_x2 * x2 + along_y2 * y2))
+        assert step.status is Status.AUXILIARY_ELBOW, step.detail
+        theta1_rate, theta2_rate, theta3_rate = step.joint_rates[:3]
+        if along_x2 > 0.0:  # eq. 45, first case: the impossible outward motion
+            assert theta3_rate == 0.0
+        else:  # eq. 45; |K3| = d_s / (ES d_e sin β_r); the bend goes the way of the home's elbow
+            k3 = -math.copysign(1.0, robot.home()[2]) * (we + es) / (es * we * math.sin(controller.elbow_region))
+            assert theta3_rate == pytest.approx(k3 * along_x2, rel=1e-9)
+        # eq. 46 with K2 = 1
+        assert theta2_rate == pytest.approx(-we / (we + es) * theta3_rate + along_y2 / (we + es), rel=1e-9, abs=1e-15)
+        assert abs(theta1_rate) < 1e-12  # nothing normal to the arm's plane was commanded
+
+
+def test_barker_first_joint_serves_the_normal_component_and_the_wrist_the_rotation() -> None:
+    robot = pinrate.robots.barker_arm()
+    parameters = pinrate.robots.parameters("barker_arm")
+    controller = Controller(robot, singularity="auxiliary_elbow", **UNLIMITED)
+    q = barker_at_extension(0.5, 0.9)
+    _, _, normal = barker_axes(q)
+    angular = np.array([0.1, -0.2, 0.05])
+    step = controller.step(q, twist_for(robot, q, 0.04 * normal, angular))
+    es, we, sn = parameters["es"], parameters["we"], parameters["sn"]
+    F1 = math.sin(q[1]) * (es + we)  # eq. 27 at θ3 = 0, A3 = 0, α3 = 90°
+    theta1 = 0.04 / F1
+    # θ1 also moves the wrist centre by -SN θ1 along the horizontal in-plane direction t
+    # (eq. 39's coefficient F2 = SN); the shoulder cancels its pitch part, eq. 46 extended.
+    _, y2, _ = barker_axes(q)
+    t = np.array([math.cos(q[0]), math.sin(q[0]), 0.0])
+    theta2 = sn * (t @ y2) * theta1 / (es + we)
+    np.testing.assert_allclose(step.joint_rates[:3], [theta1, theta2, 0.0], atol=1e-12)
+    hand = robot.frame_pose(q, "hand")[:3, :3]
+    velocity = robot.jacobian(q) @ step.joint_rates
+    base_linear = hand @ velocity[:3]
+    assert base_linear @ normal == pytest.approx(0.04, abs=1e-12)  # the normal command, by θ1
+    assert base_linear @ y2 == pytest.approx(0.0, abs=1e-12)  # no pitch: it was not commanded
+    np.testing.assert_allclose(velocity[3:], angular, atol=1e-12)  # the wrist serves the rotation
+
+
+def test_outward_commands_straighten_the_elbow_onto_full_extension_and_the_bend_alternates() -> None:
+    robot = pinrate.robots.barker_arm()
+    controller = Controller(robot, singularity="auxiliary_elbow", velocity_limits=np.inf)
+    q = barker_at_extension(0.2, 0.5)
+    q[2] = 0.03
+    bends = []
+    straight = controller.elbow.straight
+    for outward in (1.0, -1.0, 1.0, -1.0, 1.0, -1.0):
+        for _ in range(300 if outward > 0.0 else 20):
+            x2, _, _ = barker_axes(q)
+            before = q[2] - straight
+            step = controller.step(q, twist_for(robot, q, 0.05 * outward * x2))
+            assert np.isfinite(step.q).all()
+            assert (step.q[2] - straight) * before >= 0.0  # never past full extension in one step
+            q = step.q
+        bends.append(q[2] - straight)
+    out_bends, in_bends = bends[0::2], bends[1::2]
+    assert all(bend == 0.0 for bend in out_bends)  # stopped exactly at full extension, held there
+    signs = [math.copysign(1.0, bend) for bend in in_bends]
+    assert all(abs(bend) > 0.1 for bend in in_bends)
+    assert signs[0] == -1.0 and signs == [-1.0, 1.0, -1.0]  # from +0.03, each retraction bends the other way
+
+
+def test_ur5_retracts_the_hand_toward_the_shoulder_at_full_extension() -> None:
+    robot = pinrate.load("ur5")
+    controller = Controller(robot, singularity="auxiliary_elbow")
+    elbow = controller.elbow
+    assert (elbow.joint, elbow.shoulder) == ("elbow_joint", "shoulder_lift_joint")
+    assert elbow.straight == pytest.approx(0.0, abs=1e-12)
+    q = robot.home()
+    q[1:3] = -0.8, 0.0  # the upper arm reaching forward and up, the arm straight
+    data = robot.model.createData()
+
+    def shoulder_and_wrist(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        pin.forwardKinematics(robot.model, data, q)
+        shoulder = data.oMi[robot.joint_id("shoulder_lift_joint")].translation
+        wrist = data.oMi[robot.joint_id("wrist_1_joint")].translation
+        return np.array(shoulder), np.array(wrist)
+
+    shoulder, wrist = shoulder_and_wrist(q)
+    inward = (shoulder - wrist) / np.linalg.norm(shoulder - wrist)
+    tool = robot.frame_pose(q, robot.sensor)[:3, :3]
+    start = q.copy()
+
+    def retract(controller: Controller, q: np.ndarray) -> np.ndarray:
+        """The wrist centre's displacement after 1 s of a 0.05 m/s command toward the shoulder."""
+        _, wrist = shoulder_and_wrist(q)
+        for _ in range(100):
+            step = controller.step(q, np.concatenate([tool.T @ (0.05 * inward), np.zeros(3)]))
+            assert np.isfinite(step.q).all()
+            q = step.q
+        return shoulder_and_wrist(q)[1] - wrist
+
+    moved = retract(controller, start)
+    # Toward the shoulder, on the line (eq. 46 cancels the elbow's motion across it) ...
+    assert moved @ inward > 0.02
+    assert np.linalg.norm(moved - (moved @ inward) * inward) < 0.05 * (moved @ inward)
+    # ... where the generalized inverse of the default strategy cuts the lost direction.
+    assert retract(Controller(robot), start) @ inward < 0.1 * (moved @ inward)
+
+
+def test_arms_without_an_elbow_singularity_decelerate_as_the_default() -> None:
+    robot = pinrate.load("xarm7")
+    controller = Controller(robot, singularity="auxiliary_elbow")
+    assert controller.elbow is None
+    reference = Controller(robot)
+    rng = np.random.default_rng(2)
+    for q in robot.sample_configurations(5, 3):
+        twist = rng.normal(size=6) * 0.1
+        np.testing.assert_array_equal(controller.step(q, twist).joint_rates, reference.step(q, twist).joint_rates)
+
+
+def test_the_default_region_is_the_elbows_singular_region() -> None:
+    robot = pinrate.load("ur5")
+    controller = Controller(robot, singularity="auxiliary_elbow")
+    q = robot.home()
+    for factor, inside in ((0.999, True), (1.001, False)):
+        q[2] = controller.elbow.straight + math.copysign(controller.elbow_region, q[2]) * factor
+        assert (controller.conditioning(q).value < controller.slow_threshold) is inside
+    assert Controller(robot, singularity="auxiliary_elbow", elbow_region=0.05).elbow_region == 0.05
+    with pytest.raises(InputError, match="elbow_region"):
+        Controller(robot, singularity="auxiliary_elbow", elbow_region=-0.1)
