@@ -25,14 +25,17 @@ _SOURCES = {
     "ConvergenceSample": "theorem",
     "FrameError": "errors",
     "InputError": "errors",
+    "JointJog": "control",
     "LoadError": "errors",
     "Partition": "kinematics",
     "PinrateError": "errors",
+    "PoseGoal": "control",
     "Robot": "kinematics",
     "SingularBlockError": "errors",
     "Status": "control",
     "Step": "control",
     "Trajectory": "control",
+    "Uncoupled": "control",
     "convergence": "theorem",
     "joint_rates": "solvers",
     "load": "robots",
@@ -47,14 +50,17 @@ __all__ = [
     "ConvergenceSample",
     "FrameError",
     "InputError",
+    "JointJog",
     "LoadError",
     "Partition",
     "PinrateError",
+    "PoseGoal",
     "Robot",
     "SingularBlockError",
     "Status",
     "Step",
     "Trajectory",
+    "Uncoupled",
     "__version__",
     "convergence",
     "joint_rates",
@@ -66,7 +72,7 @@ __all__ = [
 
 if TYPE_CHECKING:
     from . import robots
-    from .control import Controller, Status, Step, Trajectory, servo
+    from .control import Controller, JointJog, PoseGoal, Status, Step, Trajectory, Uncoupled, servo
     from .errors import FrameError, InputError, LoadError, PinrateError, SingularBlockError
     from .kinematics import Partition, Robot
     from .robots import load

@@ -1,8 +1,9 @@
 """Control: one step (:class:`Controller`) and the loops built on it (:func:`servo`)."""
 
-from .controller import Controller, Observation, PoseGoal, Step
+from .commands import JointJog, PoseGoal, Uncoupled
+from .controller import Controller, Observation, Step
 from .servo_loop import servo
 from .status import Status
 from .trajectory import Trajectory
 
-__all__ = ["Controller", "Observation", "PoseGoal", "Status", "Step", "Trajectory", "servo"]
+__all__ = ["Controller", "JointJog", "Observation", "PoseGoal", "Status", "Step", "Trajectory", "Uncoupled", "servo"]

@@ -35,18 +35,26 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from ..checks import as_pose, check_positive, check_vector
+from ..checks import check_positive, check_vector
 from ..errors import InputError, SingularBlockError
+from ..kinematics.axes import local_axis, wrist_centre
 from ..kinematics.home import generic_ranks
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex, partition_for
 from ..kinematics.spatial import pose_error, saturate
 from ..solvers import closed_form
-from ..solvers.conditioning import characteristic_length, inverse_condition_bound, row_scale
+from ..solvers.conditioning import (
+    characteristic_length,
+    inverse_condition,
+    inverse_condition_bound,
+    row_scale,
+    truncated_pinv,
+)
 from ..solvers.generalized import damped_inverter, filtered_rates, generalized_inverter
 from ..solvers.rates import partition_rates, partition_spectral_radius
 from ..solvers.reference import Inverter
 from ..solvers.registry import check_algorithm
+from .commands import JointJog, PoseGoal, Uncoupled, joint_rate_vector
 from .elbow import ELBOW_REGION, EXTENDED, Elbow, arm_frame, elbow_rate, find_elbow, remaining_rates
 from .singularity import (
     SINGULAR_THRESHOLD,
@@ -72,22 +80,6 @@ MAX_LINEAR_SPEED = 0.5
 
 MAX_ANGULAR_SPEED = 1.0
 """Default speed limit of the commanded angular velocity (rad/s)."""
-
-
-@dataclass(frozen=True)
-class PoseGoal:
-    """A command to move the tip to ``target`` (a pose in the world): twist = gain x pose error.
-
-    ``gain`` is in 1/s: the twist commanded per metre and per radian of error.
-    """
-
-    target: pin.SE3
-    gain: float = 1.0
-
-    @classmethod
-    def of(cls, target: object, gain: float = 1.0) -> PoseGoal:
-        """A checked goal from a 4x4 homogeneous matrix or a pinocchio.SE3, and a gain > 0."""
-        return cls(as_pose(target), check_positive(gain, "gain"))
 
 
 @dataclass(slots=True)  # a record, read-only by convention: frozen dataclasses cost ~1 µs per step
@@ -294,6 +286,21 @@ class Controller:
         ranks = generic_ranks(robot, self.partition)
         self._ranks = {"J": ranks[0], "A": ranks[1], "W": ranks[2]}
         self._square_j = index.rows.size == index.columns.size == ranks[0]
+        model = robot.model
+        self._velocity_of = {name: model.joints[robot.joint_id(name)].idx_v for name in robot.joint_names}
+        self._joggable = tuple(name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1)
+        self._wrist_axes = tuple(
+            (robot.joint_id(name), local_axis(model, robot.joint_id(name)))
+            for name in self.partition.wrist[:2]
+            if model.joints[robot.joint_id(name)].nq == 1
+        )
+        # The wrist centre rides on the body that carries the first wrist joint (or the tip's).
+        self._wrist_body = (
+            model.parents[robot.joint_id(self.partition.wrist[0])]
+            if self.partition.wrist
+            else model.frames[robot.tip_id].parentJoint
+        )
+        self._centre_data = model.createData()
         self.elbow: Elbow | None = None
         """The arm's elbow and shoulder when ``singularity="auxiliary_elbow"`` found one."""
         self.elbow_region = 0.0 if elbow_region is None else check_positive(elbow_region, "elbow_region")
@@ -437,8 +444,9 @@ class Controller:
 
         Args:
             q: the configuration (nq,); checked unless ``observation`` (taken at q) is given.
-            command: a twist (m + k,) in partition order, sensor axes (m/s, rad/s), or a
-                :class:`PoseGoal`.
+            command: a twist (m + k,) in partition order, sensor axes (m/s, rad/s), a
+                :class:`PoseGoal`, a :class:`JointJog` or an :class:`Uncoupled` command
+                (:mod:`pinrate.control.commands`).
             observation: :meth:`observe` at q, when the caller already has it (the servo
                 measures its stop rules on it): it is reused, not recomputed.
 
@@ -451,6 +459,10 @@ class Controller:
         """
         if observation is None:
             observation = self.observe(q)
+        if isinstance(command, JointJog):
+            return self._jog(observation, command)
+        if isinstance(command, Uncoupled):
+            return self._uncoupled(observation, command)
         if not isinstance(command, PoseGoal):
             command = check_vector(command, self.index.rows.size, "twist (linear then angular components)")
         twist, saturated = self.command_twist(observation, command)
@@ -482,18 +494,9 @@ class Controller:
             frozen = plan.frozen
         try:
             rates = solve(frozenset())
+            rates, frozen = self._hold_at_position_limits(observation, rates, solve, statuses, details, frozen)
         except SingularBlockError as singular:
             return self._halt(observation, twist, str(singular))
-        passing = self._passing(observation.q, rates, ()) if self.position_limits else []
-        if passing:
-            try:
-                rates, blocked = self._respect_position_limits(observation, rates, passing, solve)
-            except SingularBlockError as singular:
-                return self._halt(observation, twist, f"{singular}, with the joints at their limits left out")
-            if blocked:
-                statuses.append(Status.JOINT_LIMIT)
-                details.append(f"held at a position limit: {', '.join(blocked)}")
-                frozen = frozen + tuple(name for name in blocked if name not in frozen)
         watched = None if auxiliary is not None else self._watched(observation, plan, bound, rates)
         if watched is not None:
             scale, status, detail = self._decelerate(observation, rates, *watched)
@@ -503,14 +506,133 @@ class Controller:
                 rates = rates * scale
                 statuses.append(status)
                 details.append(detail)  # NEAR_SINGULARITY: a way out, scale 1
+        step = self._finish(observation, twist, rates, statuses, details, frozen)
+        if auxiliary is not None:
+            self._reach_extension(auxiliary.bend, step.joint_rates, step.q)
+        return step
+
+    # ------------------------------------------------------------------ other commands
+    def _jog(self, observation: Observation, jog: JointJog) -> Step:
+        """A joint jog: the named joints at their rates, the others still; then the limits.
+        ``Step.twist`` is the twist the jog produces at q (partition rows, sensor axes)."""
+        requested = joint_rate_vector(jog.rates, self._joggable, self._velocity_of, self.robot.nv, "JointJog")
+        statuses: list[Status] = []
+        details: list[str] = []
+
+        def solve(left_out: frozenset[str]) -> np.ndarray:
+            rates = requested.copy()
+            for name in left_out:
+                rates[self._velocity_of[name]] = 0.0
+            return rates
+
+        rates, frozen = self._hold_at_position_limits(observation, requested.copy(), solve, statuses, details, ())
+        step = self._finish(observation, np.zeros(self.index.rows.size), rates, statuses, details, frozen)
+        step.twist = self._reduced_rows(observation.jacobian) @ step.joint_rates
+        return step
+
+    def _uncoupled(self, observation: Observation, command: Uncoupled) -> Step:
+        """Barker's uncoupled mode: the wrist joints at the rates named, the arm joints moving
+        the wrist centre (a point of the arm's last body) with the linear command, by the
+        generalized inverse of its arm Jacobian (:mod:`pinrate.control.commands`)."""
+        index = self.index
+        m = index.m
+        if command.linear.size != m:
+            raise InputError(
+                f"Uncoupled.linear must have the partition's {m} linear components ({self.partition.linear}), "
+                f"got {command.linear.size}"
+            )
+        wrist = joint_rate_vector(
+            command.wrist, self.partition.wrist, self._velocity_of, self.robot.nv, "Uncoupled.wrist"
+        )
+        centre_jacobian = self._wrist_centre_jacobian(observation)  # (m, n_arm): sensor axes
+        value = 1.0
+        statuses: list[Status] = []
+        details: list[str] = []
+        if centre_jacobian.size:
+            value, _ = inverse_condition(centre_jacobian, min(centre_jacobian.shape))
+            if value < self.slow_threshold:
+                statuses.append(Status.NEAR_SINGULARITY)
+                details.append(f"the arm's wrist-centre block is near singular (c = {value:.2g}): generalized inverse")
+
+        def solve(left_out: frozenset[str]) -> np.ndarray:
+            rates = wrist.copy()
+            for name in left_out:
+                rates[self._velocity_of[name]] = 0.0
+            kept = [position for position, name in enumerate(self.partition.arm) if name not in left_out]
+            if kept:
+                arm = truncated_pinv(centre_jacobian[:, kept], self.singular_threshold) @ command.linear
+                rates[index.arm_columns[kept]] = arm
+            return rates
+
+        rates, frozen = self._hold_at_position_limits(observation, solve(frozenset()), solve, statuses, details, ())
+        step = self._finish(observation, np.zeros(index.rows.size), rates, statuses, details, frozen)
+        step.twist = self._reduced_rows(observation.jacobian) @ step.joint_rates
+        return step
+
+    def _wrist_centre_jacobian(self, observation: Observation) -> np.ndarray:
+        """(m, n_arm): the wrist centre's velocity per arm joint rate, in the sensor frame's
+        controlled linear axes (m/s per rad/s): a point of the body that carries the first
+        wrist joint, so the wrist joints do not move it."""
+        model, data = self.robot.model, self._centre_data
+        q = observation.q
+        index = self.index
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        centre = wrist_centre(data, self._wrist_axes, np.array(data.oMf[self.robot.tip_id].translation))
+        body = self._wrist_body
+        jacobian = pin.getJointJacobian(model, data, body, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        lever = centre - np.array(data.oMi[body].translation)
+        linear = jacobian[:3] - np.cross(lever, jacobian[3:].T).T  # v_p = v_i + ω_i x (p - o_i)
+        sensor = observation.world_T_sensor.rotation
+        return (sensor.T @ linear)[index.rows[:m]][:, index.arm_columns] if (m := index.m) else np.zeros((0, 0))
+
+    def _reduced_rows(self, jacobian: np.ndarray) -> np.ndarray:
+        """J's controlled rows (m + k, nv)."""
+        return jacobian[self.index.rows]
+
+    def _hold_at_position_limits(
+        self,
+        observation: Observation,
+        rates: np.ndarray,
+        solve: Callable[[frozenset[str]], np.ndarray],
+        statuses: list[Status],
+        details: list[str],
+        frozen: tuple[str, ...],
+    ) -> tuple[np.ndarray, tuple[str, ...]]:
+        """(rates, frozen) after step 5 of the module docstring: joints that ``rates`` would
+        carry past a position limit are held at it and ``solve`` runs without them; the
+        condition is appended to ``statuses`` and ``details``. Raises SingularBlockError as
+        ``solve`` does."""
+        passing = self._passing(observation.q, rates, ()) if self.position_limits else []
+        if not passing:
+            return rates, frozen
+        try:
+            rates, blocked = self._respect_position_limits(observation, rates, passing, solve)
+        except SingularBlockError as singular:
+            raise SingularBlockError(f"{singular}, with the joints at their limits left out") from None
+        if blocked:
+            statuses.append(Status.JOINT_LIMIT)
+            details.append(f"held at a position limit: {', '.join(blocked)}")
+            frozen = frozen + tuple(name for name in blocked if name not in frozen)
+        return rates, frozen
+
+    def _finish(
+        self,
+        observation: Observation,
+        twist: np.ndarray,
+        rates: np.ndarray,
+        statuses: list[Status],
+        details: list[str],
+        frozen: tuple[str, ...],
+    ) -> Step:
+        """The end of every step: velocity limits (one scale factor), integration over dt,
+        the clamp to the position limits, the status."""
         scale = self._rate_scale(rates)
         if scale < 1.0:
             rates = rates * scale
             statuses.append(Status.RATE_LIMITED)
             details.append(f"rates scaled by {scale:.3g} to meet the velocity limits")
         next_q = self.robot.integrate(observation.q, rates, self.dt)
-        if auxiliary is not None:
-            self._reach_extension(auxiliary.bend, rates, next_q)
         if self.position_limits:
             hit = self._clamp(next_q)
             if hit and Status.JOINT_LIMIT not in statuses:

@@ -55,6 +55,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
+from ..kinematics.axes import PARALLEL, Axis, distance_to_axis, local_axis, world_axis, wrist_centre
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..solvers.conditioning import truncated_pinv
@@ -66,12 +67,6 @@ decelerate never acts on the elbow's singularity), capped here."""
 
 EXTENDED = 1e-12
 """rad: an elbow this close to its straight value is at full extension."""
-
-PARALLEL = 1e-6
-"""|z_s × z_e| under this: the shoulder and elbow axes are parallel."""
-
-Axis = tuple[int, tuple[float, float, float]]
-"""A revolute joint: its Pinocchio id and its unit axis in its own joint frame."""
 
 
 @dataclass(frozen=True)
@@ -110,51 +105,6 @@ class Elbow:
         r(β)² = ES² + d_e² + 2 ES d_e cos β, so dr/dβ = -ES d_e sin β / r)."""
         upper_arm = self.reach - self.forearm
         return self.reach / (upper_arm * self.forearm * math.sin(min(region, math.pi / 2)))
-
-
-def local_axis(model: pin.Model, joint_id: int) -> tuple[float, float, float]:
-    """The unit axis of a 1-DOF revolute joint in its own frame: the angular part of its
-    motion subspace (unit joint velocity)."""
-    data = model.createData()
-    velocity = np.zeros(model.nv)
-    velocity[model.joints[joint_id].idx_v] = 1.0
-    pin.forwardKinematics(model, data, pin.neutral(model), velocity)
-    angular = np.array(data.v[joint_id].angular)
-    return tuple(float(value) for value in angular / np.linalg.norm(angular))  # type: ignore[return-value]
-
-
-def world_axis(data: pin.Data, axis: Axis) -> np.ndarray:
-    """The joint's unit axis in the world, after ``forwardKinematics``."""
-    joint_id, local = axis
-    return data.oMi[joint_id].rotation @ np.array(local)
-
-
-def wrist_centre(data: pin.Data, wrist: tuple[Axis, ...], tip: np.ndarray) -> np.ndarray:
-    """The wrist centre in the world (m), after ``forwardKinematics``: the midpoint of the
-    common perpendicular of the first two wrist axes (their intersection on a spherical
-    wrist), the first wrist joint's origin when they are parallel or there is one, ``tip``
-    (the tip's origin) when there is none."""
-    if not wrist:
-        return tip
-    first_origin = np.array(data.oMi[wrist[0][0]].translation)
-    if len(wrist) == 1:
-        return first_origin
-    a, b = world_axis(data, wrist[0]), world_axis(data, wrist[1])
-    second_origin = np.array(data.oMi[wrist[1][0]].translation)
-    offset = second_origin - first_origin
-    ab = float(a @ b)
-    denominator = 1.0 - ab * ab
-    if denominator < PARALLEL:
-        return first_origin
-    along_a = (float(a @ offset) - ab * float(b @ offset)) / denominator
-    along_b = (ab * float(a @ offset) - float(b @ offset)) / denominator
-    return 0.5 * ((first_origin + along_a * a) + (second_origin + along_b * b))
-
-
-def distance_to_axis(point: np.ndarray, origin: np.ndarray, axis: np.ndarray) -> float:
-    """Perpendicular distance (m) of ``point`` from the line through ``origin`` along unit ``axis``."""
-    offset = point - origin
-    return float(np.linalg.norm(offset - (offset @ axis) * axis))
 
 
 def upper_arm_frame(
@@ -338,5 +288,4 @@ __all__ = [
     "find_elbow",
     "remaining_rates",
     "upper_arm_frame",
-    "wrist_centre",
 ]

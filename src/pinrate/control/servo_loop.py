@@ -48,7 +48,8 @@ from ..checks import check_count, check_positive
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
-from .controller import MAX_ANGULAR_SPEED, MAX_LINEAR_SPEED, Controller, Observation, PoseGoal, error_norms
+from .commands import PoseGoal
+from .controller import MAX_ANGULAR_SPEED, MAX_LINEAR_SPEED, Controller, Observation, error_norms
 from .status import Status
 from .trajectory import Trajectory
 
