@@ -56,6 +56,8 @@ from ..solvers.reference import Inverter
 from ..solvers.registry import check_algorithm
 from .commands import JointJog, PoseGoal, Uncoupled, joint_rate_vector
 from .elbow import ELBOW_REGION, EXTENDED, Elbow, arm_frame, elbow_rate, find_elbow, remaining_rates
+from .posture import PostureJoints, null_space_motion, posture_joints
+from .posture import gradient as posture_gradient
 from .singularity import (
     SINGULAR_THRESHOLD,
     SLOW_THRESHOLD,
@@ -232,6 +234,11 @@ class Controller:
             bend at which c of the measured block reaches ``slow_threshold`` at home (the
             elbow's whole singular region; 0.15 rad on the UR5), at most
             :data:`~pinrate.control.elbow.ELBOW_REGION`.
+        posture: None (off), ``"home"`` or a configuration (nq,): a secondary task for
+            redundant partitions moves the joints toward it and away from their limits in
+            the null space of the twist (:mod:`.posture`), outside the singular region. Off
+            by default, so the step's rates are the algorithm's.
+        posture_gain: k (1/s) of the secondary task.
 
     Raises:
         InputError: an unknown algorithm or strategy (the message lists the valid ones), a
@@ -255,6 +262,8 @@ class Controller:
         max_linear_speed: float = MAX_LINEAR_SPEED,
         max_angular_speed: float = MAX_ANGULAR_SPEED,
         elbow_region: float | None = None,
+        posture: object = None,
+        posture_gain: float = 1.0,
     ) -> None:
         self.robot = robot
         self.algorithm = check_algorithm(algorithm)
@@ -301,6 +310,8 @@ class Controller:
             else model.frames[robot.tip_id].parentJoint
         )
         self._centre_data = model.createData()
+        self.posture_gain = check_positive(posture_gain, "posture_gain")
+        self._posture = self._posture_joints(posture)
         self.elbow: Elbow | None = None
         """The arm's elbow and shoulder when ``singularity="auxiliary_elbow"`` found one."""
         self.elbow_region = 0.0 if elbow_region is None else check_positive(elbow_region, "elbow_region")
@@ -312,6 +323,40 @@ class Controller:
                 self._bend_sign = -1.0 if bent < 0.0 else 1.0  # the first bend goes the home's way
                 if elbow_region is None:
                     self.elbow_region = self._slow_bend(self.elbow)
+
+    def _posture_joints(self, posture: object) -> PostureJoints | None:
+        """The secondary task's joints and preferred posture, or None when it is off."""
+        if posture is None:
+            return None
+        if isinstance(posture, str):
+            if posture != "home":
+                raise InputError(f"posture must be None, 'home' or a configuration ({self.robot.nq},), not {posture!r}")
+            preferred = self.robot.home()
+        else:
+            preferred = self.robot.check_q(posture)
+        model = self.robot.model
+        positions, q_indices = [], []
+        for position, name in enumerate(self._names):
+            joint = model.joints[self.robot.joint_id(name)]
+            if joint.nq == 1:
+                positions.append(position)
+                q_indices.append(joint.idx_q)
+        lower, upper = (np.array(bounds)[q_indices] for bounds in self.robot.position_limits())
+        return posture_joints(positions, q_indices, lower, upper, preferred[q_indices])
+
+    def _null_motion(self, observation: Observation, left_out: frozenset[str]) -> np.ndarray:
+        """Rates (nv,) of the secondary task: -k ∇H projected onto the null space of the
+        partition's J without the ``left_out`` joints (:mod:`.posture`)."""
+        joints = self._posture
+        assert joints is not None
+        index = self.index
+        descent = np.zeros(index.columns.size)
+        descent[joints.positions] = -self.posture_gain * posture_gradient(joints, observation.q)
+        kept = [position for position, name in enumerate(self._names) if name not in left_out]
+        scaled = self._reduced(observation.jacobian)[:, kept] * self._row_scale_column
+        rates = np.zeros(self.robot.nv)
+        rates[index.columns[kept]] = null_space_motion(scaled, descent[kept], self.singular_threshold)
+        return rates
 
     def _slow_bend(self, elbow: Elbow) -> float:
         """The bend from full extension (rad, toward home's side, others at home) at which c of
@@ -492,6 +537,12 @@ class Controller:
             statuses.extend(plan.statuses)
             details.extend(plan.details)
             frozen = plan.frozen
+        if self._posture is not None and plan is None and auxiliary is None:
+            task = solve
+
+            def solve(left_out: frozenset[str]) -> np.ndarray:
+                return task(left_out) + self._null_motion(observation, left_out)
+
         try:
             rates = solve(frozenset())
             rates, frozen = self._hold_at_position_limits(observation, rates, solve, statuses, details, frozen)
