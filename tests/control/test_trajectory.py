@@ -30,6 +30,7 @@ def test_the_reversed_rates_lead_back_to_the_start(run) -> None:
     np.testing.assert_allclose(q, trajectory.q[0], atol=1e-6)
     assert backwards.status[-1] == "reversed" and len(backwards.status) == len(trajectory.status)
     assert backwards.reason.startswith("reversed: ") and not backwards.converged
+    assert len(backwards.detail) == len(trajectory.detail) and backwards.detail[-1].startswith("reversed: ")
 
 
 def test_a_trajectory_saves_and_loads(run, tmp_path: Path) -> None:
@@ -39,6 +40,7 @@ def test_a_trajectory_saves_and_loads(run, tmp_path: Path) -> None:
     for name in ("q", "position_error", "orientation_error", "spectral_radius", "joint_rates"):
         np.testing.assert_array_equal(getattr(loaded, name), getattr(trajectory, name))
     assert loaded.status == trajectory.status and loaded.reason == trajectory.reason
+    assert loaded.detail == trajectory.detail and len(loaded.detail) == loaded.q.shape[0]
     assert loaded.converged == trajectory.converged and loaded.dt == trajectory.dt
     assert loaded.algorithm == trajectory.algorithm and loaded.partition == trajectory.partition
     # A name without the suffix is written as given.
@@ -57,3 +59,16 @@ def test_bad_trajectory_files_are_input_errors(run, tmp_path: Path) -> None:
         pinrate.Trajectory.load(tmp_path / "other.npz")
     with pytest.raises(pinrate.InputError, match="folder"):
         trajectory.save(tmp_path)
+
+
+def test_every_step_leaves_its_detail_in_words() -> None:
+    robot = pinrate.load("ur5")
+    q0 = robot.home()
+    q0[2] = 0.3  # near the elbow singularity: the run decelerates and says so
+    far = robot.pose(q0)
+    far[:3, 3] *= 1.4  # out of reach: the arm extends toward full extension
+    trajectory = pinrate.servo(robot, q0, far, algorithm="exact", max_steps=300)
+    assert len(trajectory.detail) == trajectory.q.shape[0] and trajectory.detail[-1] == trajectory.reason
+    words = [detail for status, detail in zip(trajectory.status, trajectory.detail, strict=True) if status != "moving"]
+    assert words and all(words)  # every step that met a condition says which
+    assert any("block J" in detail for detail in trajectory.detail)

@@ -297,7 +297,9 @@ class Controller:
         self._square_j = index.rows.size == index.columns.size == ranks[0]
         model = robot.model
         self._velocity_of = {name: model.joints[robot.joint_id(name)].idx_v for name in robot.joint_names}
-        self._joggable = tuple(name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1)
+        self.joggable: tuple[str, ...] = tuple(
+            name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1
+        )
         self._wrist_axes = tuple(
             (robot.joint_id(name), local_axis(model, robot.joint_id(name)))
             for name in self.partition.wrist[:2]
@@ -566,7 +568,7 @@ class Controller:
     def _jog(self, observation: Observation, jog: JointJog) -> Step:
         """A joint jog: the named joints at their rates, the others still; then the limits.
         ``Step.twist`` is the twist the jog produces at q (partition rows, sensor axes)."""
-        requested = joint_rate_vector(jog.rates, self._joggable, self._velocity_of, self.robot.nv, "JointJog")
+        requested = joint_rate_vector(jog.rates, self.joggable, self._velocity_of, self.robot.nv, "JointJog")
         statuses: list[Status] = []
         details: list[str] = []
 

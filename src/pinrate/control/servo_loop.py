@@ -32,10 +32,12 @@ norms ``tol`` applies to):
   ln(e0 / tol) / ln(1 / 0.99) windows whatever ``max_steps`` is.
 - **singular**: the step halted for a singularity (``singularity="decelerate"``: the next
   step would have made a block singular; or the algorithm met a singular block).
+- **collision**: the step halted before two links would come within the collision monitor's
+  stop distance (``Controller(collision=True)``).
+- **max steps**: ``max_steps`` ran out.
 
 A joint limit does not stop the run: the step holds the joint on its limit while the others
 go on serving the error (a target the held joint was needed for then ends as "stalled").
-- **max steps**: ``max_steps`` ran out.
 """
 
 from __future__ import annotations
@@ -74,7 +76,9 @@ _STEP_WORDS = {
     Status.WRIST_SINGULARITY: "wrist singularity",
     Status.NEAR_SINGULARITY: "near singularity",
     Status.DECELERATE_FOR_SINGULARITY: "decelerating",
+    Status.AUXILIARY_ELBOW: "auxiliary elbow",
     Status.FROZEN: "frozen",
+    Status.DECELERATE_FOR_COLLISION: "slowing for collision",
 }
 """The word a step's status leaves in ``Trajectory.status`` ("moving" for the others)."""
 
@@ -133,7 +137,7 @@ def servo(
     stall_steps = min(math.ceil(check_positive(stall_time, "stall_time") / controller.dt), STALL_MAX_STEPS)
     m = controller.index.m
 
-    configurations, rates_log, status = [q], [], []
+    configurations, rates_log, status, details = [q], [], [], []
     position_errors, orientation_errors, radii = [], [], []
 
     def record(q: np.ndarray) -> Observation:
@@ -175,11 +179,16 @@ def servo(
         if step.status is Status.HALT_FOR_SINGULARITY:
             final, reason = "singular", f"singular: {step.detail} at step {step_number}"
             break
+        if step.status is Status.HALT_FOR_COLLISION:
+            final, reason = "collision", f"collision: {step.detail} at step {step_number}"
+            break
         status.append(_STEP_WORDS.get(step.status, "moving"))
+        details.append(step.detail)
         q = step.q
         rates_log.append(step.joint_rates)
         configurations.append(q)
     status.append(final)
+    details.append(reason)
     return Trajectory(
         q=np.array(configurations),
         position_error=np.array(position_errors),
@@ -192,4 +201,5 @@ def servo(
         algorithm=controller.algorithm,
         dt=controller.dt,
         partition=controller.partition,
+        detail=details,
     )

@@ -33,11 +33,14 @@ class Trajectory:
             limit" (a joint held at a position limit), "rate limited" (a velocity limit bound),
             "wrist singularity", "near singularity", "decelerating", "frozen" (the
             singularity strategies, :mod:`pinrate.control.singularity`) or the final state
-            ("converged", "diverging", "stalled", "singular", "max steps";
+            ("converged", "diverging", "stalled", "singular", "collision", "max steps";
             see :mod:`pinrate.control.servo_loop`).
         joint_rates: the rates applied after each configuration but the last, (N - 1, nv).
         converged: both errors below tol at the last configuration.
         reason: why the run stopped, in words.
+        detail: per configuration, what limited the step taken from it, in words (which
+            joint, which block, what conditioning or distance; "" when nothing did); the last
+            is ``reason``. Empty for trajectories saved before it existed.
     """
 
     q: np.ndarray
@@ -51,6 +54,7 @@ class Trajectory:
     algorithm: str
     dt: float
     partition: Partition = field(repr=False)
+    detail: list[str] = field(default_factory=list, repr=False)
 
     @property
     def steps(self) -> int:
@@ -81,6 +85,7 @@ class Trajectory:
             algorithm=self.algorithm,
             dt=self.dt,
             partition=self.partition,
+            detail=[*self.detail[-2::-1], f"reversed: {self.reason}"] if self.detail else [],
         )
 
     def save(self, path: str | os.PathLike[str]) -> Path:
@@ -102,6 +107,7 @@ class Trajectory:
                 stream,
                 format=np.array(FORMAT),
                 status=np.array(self.status, dtype=str),
+                detail=np.array(self.detail, dtype=str),
                 arm=np.array(self.partition.arm, dtype=str),
                 wrist=np.array(self.partition.wrist, dtype=str),
                 converged=np.array(self.converged),
@@ -138,6 +144,7 @@ class Trajectory:
                 arrays = {name: np.array(data[name], dtype=float) for name in _ARRAYS}
                 texts = {name: str(data[name]) for name in _TEXTS}
                 status = [str(word) for word in data["status"]]
+                detail = [str(words) for words in data["detail"]] if "detail" in data.files else []
                 arm, wrist = [str(j) for j in data["arm"]], [str(j) for j in data["wrist"]]
                 converged, dt = bool(data["converged"]), float(data["dt"])
         except (OSError, ValueError, zipfile.BadZipFile) as error:
@@ -147,6 +154,8 @@ class Trajectory:
             count - 1, 0
         ):
             raise InputError(f"trajectory file {str(source)!r}: its arrays do not fit together")
+        if detail and len(detail) != count:
+            raise InputError(f"trajectory file {str(source)!r}: {len(detail)} details for {count} configurations")
         try:
             partition = Partition(arm, wrist, linear=texts["linear"], angular=texts["angular"])
         except PinrateError as error:
@@ -158,5 +167,6 @@ class Trajectory:
             algorithm=texts["algorithm"],
             dt=dt,
             partition=partition,
+            detail=detail,
             **arrays,
         )
