@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import pinrate
-from pinrate import Controller, Status
+from pinrate import Controller, InputError, Status
 
 AL5D = Path(__file__).parent.parent / "data" / "third_party" / "rtb_al5d_robot.urdf"
 
@@ -133,3 +133,32 @@ def test_a_zero_urdf_velocity_means_no_limit(tmp_path: Path) -> None:
     path.write_text(re.sub(r'velocity="[^"]*"', 'velocity="0"', text), encoding="utf-8")
     robot = pinrate.load(path)
     assert np.all(np.isinf(Controller(robot).velocity_limits))
+
+
+def test_acceleration_limits_bound_every_change_of_rate_and_keep_its_direction() -> None:
+    robot = pinrate.load("ur5")
+    limits = np.array([2.0, 2.0, 3.0, 4.0, 4.0, 4.0])  # rad/s²
+    controller = Controller(robot, acceleration_limits=limits)
+    free = Controller(robot)
+    q = robot.home()
+    previous = np.zeros(6)
+    rng = np.random.default_rng(8)
+    twist = rng.normal(size=6) * 0.1
+    for index in range(200):
+        if index % 40 == 0:
+            twist = rng.normal(size=6) * 0.1  # an abrupt new command
+        wanted = free.step(q, twist).joint_rates
+        step = controller.step(q, twist)
+        change = step.joint_rates - previous
+        assert np.all(np.abs(change) <= limits * controller.dt * (1 + 1e-12))
+        if Status.RATE_LIMITED in step.conditions:  # the change points from the last rates to the wanted ones
+            direction = wanted - previous
+            np.testing.assert_allclose(change / np.linalg.norm(change), direction / np.linalg.norm(direction))
+        else:
+            np.testing.assert_allclose(step.joint_rates, wanted)
+        previous, q = step.joint_rates, step.q
+    controller.reset()
+    first = controller.step(q, twist)
+    assert np.all(np.abs(first.joint_rates) <= limits * controller.dt * (1 + 1e-12))  # from rest again
+    with pytest.raises(InputError, match="acceleration_limits"):
+        Controller(robot, acceleration_limits=-1.0)

@@ -239,6 +239,13 @@ class Controller:
             the null space of the twist (:mod:`.posture`), outside the singular region. Off
             by default, so the step's rates are the algorithm's.
         posture_gain: k (1/s) of the secondary task.
+        acceleration_limits: None (the default: a URDF states none; MoveIt keeps them in
+            ``joint_limits.yaml``), a number for every joint or one per velocity component
+            (nv,), in rad/s² or m/s². With limits, the controller remembers the rates it
+            applied last (:meth:`reset` forgets them) and moves each step's rates from those
+            toward the new ones by at most a·dt per joint, one factor for all joints, so the
+            change keeps its direction (``Status.RATE_LIMITED``). Position limits and halts
+            act at once, whatever the acceleration.
 
     Raises:
         InputError: an unknown algorithm or strategy (the message lists the valid ones), a
@@ -264,6 +271,7 @@ class Controller:
         elbow_region: float | None = None,
         posture: object = None,
         posture_gain: float = 1.0,
+        acceleration_limits: object = None,
     ) -> None:
         self.robot = robot
         self.algorithm = check_algorithm(algorithm)
@@ -280,6 +288,10 @@ class Controller:
         self.position_limits = position_limits
         self._limits = self._position_limits()
         self.velocity_limits = self._velocity_limits(velocity_limits)
+        self.acceleration_limits = (
+            None if acceleration_limits is None else self._per_joint(acceleration_limits, "acceleration_limits")
+        )
+        self._previous_rates = np.zeros(robot.nv)
         self._rate_limit_rows = [
             (velocity, float(limit)) for velocity, limit in enumerate(self.velocity_limits) if math.isfinite(limit)
         ]
@@ -399,21 +411,29 @@ class Controller:
         if limits is None:
             urdf = np.array(self.robot.model.velocityLimit, dtype=float)
             return np.where((urdf > 0) & (urdf < VELOCITY_LIMIT_UNLIMITED), urdf, np.inf)
+        return self._per_joint(limits, "velocity_limits")
+
+    def _per_joint(self, limits: object, what: str) -> np.ndarray:
+        """One positive limit per velocity component (nv,) from a number or an (nv,) array."""
         if np.ndim(limits) == 0:
-            value = check_positive(limits, "velocity_limits", allow_inf=True)
+            value = check_positive(limits, what, allow_inf=True)
             return np.full(self.robot.nv, value)
         try:
             values = np.array(limits, dtype=float)
         except (TypeError, ValueError):
-            raise InputError(f"velocity_limits must be numbers, not {type(limits).__name__}") from None
+            raise InputError(f"{what} must be numbers, not {type(limits).__name__}") from None
         if values.shape != (self.robot.nv,):
             raise InputError(
-                f"velocity_limits must be one number or {self.robot.nv} (one per velocity component of "
+                f"{what} must be one number or {self.robot.nv} (one per velocity component of "
                 f"{self.robot.name!r}), got shape {values.shape}"
             )
         if np.isnan(values).any() or (values <= 0).any():
-            raise InputError(f"velocity_limits must be positive (inf for none), got {values}")
+            raise InputError(f"{what} must be positive (inf for none), got {values}")
         return values
+
+    def reset(self) -> None:
+        """Forget the rates applied last (the start of an acceleration-limited motion is at rest)."""
+        self._previous_rates = np.zeros(self.robot.nv)
 
     # ------------------------------------------------------------------ seeing
     def observe(self, q: object, goal: PoseGoal | None = None) -> Observation:
@@ -685,6 +705,8 @@ class Controller:
             rates = rates * scale
             statuses.append(Status.RATE_LIMITED)
             details.append(f"rates scaled by {scale:.3g} to meet the velocity limits")
+        if self.acceleration_limits is not None:
+            rates = self._limit_acceleration(rates, statuses, details)
         next_q = self.robot.integrate(observation.q, rates, self.dt)
         if self.position_limits:
             hit = self._clamp(next_q)
@@ -696,6 +718,7 @@ class Controller:
         return Step(next_q, rates, status, frozen, twist, observation, "; ".join(details), conditions)
 
     def _halt(self, observation: Observation, twist: np.ndarray, detail: str) -> Step:
+        self._previous_rates = np.zeros(self.robot.nv)
         return Step(
             observation.q.copy(),
             np.zeros(self.robot.nv),
@@ -1036,6 +1059,21 @@ class Controller:
             angular=partition.angular,
         )
         return partition_rates(observation.jacobian, reduced.resolve(self.robot), twist, self.algorithm)
+
+    def _limit_acceleration(self, rates: np.ndarray, statuses: list[Status], details: list[str]) -> np.ndarray:
+        """previous + s (rates - previous), s the largest factor <= 1 keeping every change
+        within a·dt; remembers the result. Between two rate vectors within the velocity
+        limits, the result is within them too."""
+        assert self.acceleration_limits is not None
+        change = rates - self._previous_rates
+        largest = np.abs(change) / (self.acceleration_limits * self.dt)
+        worst = float(largest.max(initial=0.0))
+        if worst > 1.0:
+            rates = self._previous_rates + change / worst
+            statuses.append(Status.RATE_LIMITED)
+            details.append(f"rates changed by {1.0 / worst:.3g} of the step's change to meet the acceleration limits")
+        self._previous_rates = rates.copy()
+        return rates
 
     def _rate_scale(self, rates: np.ndarray) -> float:
         """The largest factor <= 1 that brings every rate within its velocity limit."""
