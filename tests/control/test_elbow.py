@@ -1,6 +1,6 @@
-"""Barker's auxiliary elbow control (eq. 45-46) against the paper's closed forms written
-here: the upper arm's axes X2, Y2 from R_2^1 R_1^0 (eq. B25-B29, re-derived: the OCR'd B28-B29
-misplace a bracket), F1 from eq. 27; and on the UR5, the hand retracting toward the shoulder."""
+"""Barker's auxiliary elbow control (eq. 45-46) against the paper's closed forms: the upper
+arm's axes X2, Y2 from R_2^1 R_1^0 (eq. B25-B29, :func:`pinrate.papers.barker.upper_arm_axes`),
+F1 from eq. 27; and on the UR5, the hand retracting toward the shoulder."""
 
 from __future__ import annotations
 
@@ -12,16 +12,14 @@ import pytest
 
 import pinrate
 from pinrate import Controller, InputError, Status
+from pinrate.papers.barker import upper_arm_axes
 
 UNLIMITED = {"velocity_limits": np.inf, "position_limits": False}
 
 
 def barker_axes(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(X2, Y2, normal) in base axes: rows of R_2^1 R_1^0 (eq. B25-B27), and X2 x Y2."""
-    C1, S1, C2, S2 = math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1])
-    R10 = np.array([[-C1, -S1, 0.0], [0.0, 0.0, 1.0], [-S1, C1, 0.0]])  # eq. B25
-    R21 = np.array([[-S2, C2, 0.0], [-C2, -S2, 0.0], [0.0, 0.0, 1.0]])  # eq. B26
-    x2, y2, _ = R21 @ R10
+    x2, y2 = upper_arm_axes(q)
     return x2, y2, np.cross(x2, y2)
 
 

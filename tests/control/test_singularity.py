@@ -13,7 +13,7 @@ import pytest
 import pinrate
 from pinrate import Controller, Status
 from pinrate.control.singularity import STRATEGIES, WRIST_STRATEGIES
-from pinrate.papers.worked_examples import barker_singular_configurations
+from pinrate.papers.barker import barker_m, barker_singular_configurations
 
 UNLIMITED = {"velocity_limits": np.inf, "position_limits": False}
 
@@ -55,19 +55,6 @@ def test_every_strategy_is_finite_at_exactly_singular_configurations(algorithm, 
             assert np.isfinite(step.q).all() and np.isfinite(step.joint_rates).all(), (name, step.detail)
             if controller.conditioning(q).value < controller.slow_threshold:  # not A, W of an MCA at the elbow
                 assert step.status.severity > Status.JOINT_LIMIT.severity and step.detail, (name, step.detail)
-
-
-def barker_m(q: np.ndarray) -> np.ndarray:
-    """Barker's M (eq. 26-31): TVEL in base axes = M [θ1 θ2 θ3] rates."""
-    parameters = pinrate.robots.parameters("barker_arm")
-    es, we, sn, a3, alpha3 = (parameters[key] for key in ("es", "we", "sn", "a3", "alpha3"))
-    t1, t2, t3 = q[:3]
-    C1, S1, S2, C2 = math.cos(t1), math.sin(t1), math.sin(t2), math.cos(t2)
-    S23, C23, SAL3, CAL3 = math.sin(t2 + t3), math.cos(t2 + t3), math.sin(alpha3), math.cos(alpha3)
-    F4 = C23 * SAL3 * we - S23 * a3
-    F5 = S23 * SAL3 * we + C23 * a3
-    F1, F2, F3 = S2 * es + F5, sn + CAL3 * we, C2 * es + F4
-    return np.array([[-S1 * F1 - C1 * F2, C1 * F3, C1 * F4], [C1 * F1 - S1 * F2, S1 * F3, S1 * F4], [0, -F1, -F5]])
 
 
 def test_barker_m_is_the_arm_block_in_base_axes() -> None:

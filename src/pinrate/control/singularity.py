@@ -14,7 +14,10 @@ least c is under ``slow_threshold``; there, ``singularity=`` decides:
   A step that raises c is executed unscaled: the way out is always open (MoveIt Servo's
   look-ahead, on the block actually inverted);
 * ``"generalized_inverse"``: Barker's M* (eq. 38, 44, 60) — each inversion by the
-  Moore-Penrose inverse with singular values under ``singular_threshold`` · σ_1 cut;
+  Moore-Penrose inverse with singular values under ``singular_threshold`` · σ_1 cut. On
+  Barker's arm this equals the 2x2 reduction (eq. 39-44) at θ3 = 0 for a command in M's
+  range (M's null vector leaves θ1 alone), not for a command with an outward part, nor at
+  S2 ES + F5 = 0, where the null vector moves θ1 (:mod:`pinrate.papers.barker`);
 * ``"freeze"`` (Barker's "variables held constant"): the joints that carry the lost
   direction (those with at least :data:`FREEZE_SHARE` of the largest entry of the weakest
   block's smallest right singular vector) hold still and the others serve the command, until

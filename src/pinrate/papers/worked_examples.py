@@ -38,6 +38,8 @@ from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..solvers.rates import joint_rates
 from ..theorem import convergence, sample_convergence
+from . import barker
+from .barker import barker_singular_configurations
 
 
 @dataclass(frozen=True)
@@ -262,7 +264,6 @@ def spherical_6dof_fractions(count: int = 20000) -> tuple[float, float, bool]:
 
 
 # ---------------------------------------------------------------------- Barker
-BARKER_ES, BARKER_WE = 0.4318, 0.4331
 
 
 def barker_det_deviation(count: int = 300, **lengths: float) -> float:
@@ -287,13 +288,6 @@ def barker_det_deviation(count: int = 300, **lengths: float) -> float:
         return abs(float(np.linalg.det(A)) - closed_form) / (1 + abs(closed_form))
 
     return _max_over_configurations(robot, count, deviation)
-
-
-def barker_singular_configurations() -> tuple[np.ndarray, np.ndarray]:
-    """q on each singular surface of the nominal arm: theta3 = 0 (eq. 33) and S2 ES + S23 WE = 0 (eq. 32)."""
-    theta2 = 0.5
-    theta3 = math.asin(-math.sin(theta2) * BARKER_ES / BARKER_WE) - theta2
-    return np.array([0.3, 0.4, 0.0, 0.1, 0.6, 0.0]), np.array([0.3, theta2, theta3, 0.1, 0.6, 0.0])
 
 
 def barker_singular(q: np.ndarray) -> bool:
@@ -444,6 +438,115 @@ def _outcome(simulation: Simulation) -> str:
     return f"diverges ({simulation.reason.split(':')[0]}, error ×{simulation.error_growth:.1f})"
 
 
+def _barker_arm_rows() -> list[Result]:
+    """Barker eq. 25-44 against pinrate's step (:mod:`pinrate.papers.barker`)."""
+    test = "papers/test_barker.py::"
+    extended, extended_along = barker.singular_case(0), barker.singular_case(0, barker.ALONG_THE_ARM)
+    least_radius = barker.singular_case(1)
+    condition, _, reduction_error = barker.reduction_at_theta1_zero()
+    reference_tvel = ", ".join(f"{value:g}" for value in barker.REFERENCE_TVEL)
+    return [
+        Result(
+            "Barker eq. 25-31",
+            "TVEL^ = M [theta1 theta2 theta3]', M from F1..F5; F2 = SN~ + CAL3 WE with SN~ = SN + R3 "
+            "(the OCR drops the tilde, eq. C19)",
+            f"R_hand A (the robot's arm block in base axes) vs M: max deviation {barker.m_deviation():.1e} m "
+            f"(nominal), {barker.m_deviation(alpha3=1.4, a3=0.05, r3=0.03):.1e} (alpha3 = 1.4, a3 = 0.05, r3 = 0.03)",
+            test + "test_m_eq_25_31",
+        ),
+        Result(
+            "Barker eq. 34-37",
+            "closed-form arm rates for det M != 0 (as printed, eq. 35 has the wrong overall sign and "
+            "eq. 36 the wrong sign of TVEL(2) F6; eq. 34 is (C1 TVEL(2) - S1 TVEL(1)) / F1)",
+            f"MCA1 and MCA2 steps vs eq. 34-37 with the signs derived: max relative deviation "
+            f"{max(barker.arm_rates_deviation(), barker.arm_rates_deviation(alpha3=1.4, a3=0.05, r3=0.03)):.1e} "
+            f"(nominal and alpha3 = 1.4, a3 = 0.05, r3 = 0.03); the printed eq. 35-36 are off by up to "
+            f"{barker.printed_arm_rates_error():.1f}× the largest rate",
+            test + "test_arm_rates_eq_34_37",
+        ),
+        Result(
+            "Barker eq. 38",
+            "near det M = 0: the generalized inverse, M* TVEL^",
+            f"singularity=generalized_inverse at theta3 = 0 and at S2 ES + F5 = 0, commands with and without "
+            f"a component along the arm, MCA1 and MCA2: step vs M* TVEL^ (M* cut at singular_threshold), max "
+            f"deviation {barker.generalized_inverse_deviation():.1e} rad/s",
+            test + "test_generalized_inverse_eq_38",
+        ),
+        Result(
+            "Barker eq. 39-44",
+            "theta1 by eq. 39 (F2 != 0), (theta2, theta3) = M1* g1: only a 2x2 inverse",
+            f"off the singular region, MCA2 step vs reduction: max relative deviation "
+            f"{barker.reduction_deviation():.1e}; but det M1 = S1 det M: at theta1 = 0 (c = {condition:.2f}) M1 is "
+            f"singular, M1* drops TVEL(2) and misses TVEL^ = ({reference_tvel}) m/s by {reduction_error:.2f} m/s",
+            test + "test_reduction_eq_39_44",
+        ),
+        Result(
+            "Barker eq. 38 vs 39-44, theta3 = 0",
+            "M* (eq. 38) and M1* (eq. 44) are both the generalized-inverse solution",
+            f"M's null vector (0, F4, -F3) leaves theta1 alone: for TVEL^ in M's range the step and the "
+            f"reduction agree within {np.abs(extended.step_rates - extended.reduction).max():.0e} rad/s, both "
+            f"exact; with {barker.ALONG_THE_ARM} m/s along the arm added they differ: theta1 "
+            f"{extended_along.step_rates[0]:.3f} (step) vs {extended_along.reduction[0]:.3f} rad/s, TVEL^ missed "
+            f"by {extended_along.step_error:.3f} (the unreachable part, least) vs "
+            f"{extended_along.reduction_error:.3f} m/s",
+            test + "test_eq_38_and_39_44_at_full_extension",
+        ),
+        Result(
+            "Barker eq. 38 vs 39-44, S2 ES + F5 = 0",
+            "M* (eq. 38) and M1* (eq. 44) are both the generalized-inverse solution",
+            f"M's null vector (F3, F2, 0) moves theta1: for a feasible TVEL^ both are exact (miss "
+            f"{least_radius.step_error:.0e}, {least_radius.reduction_error:.0e} m/s) yet differ: the step (M*) "
+            f"gives theta1, theta2 = {least_radius.step_rates[0]:.4f}, {least_radius.step_rates[1]:.4f} rad/s, "
+            f"the reduction {least_radius.reduction[0]:.4f}, {abs(least_radius.reduction[1]):.4f} "
+            "(M1 = [[0, 0], [0, -F5]]); pinrate's generalized_inverse is M*",
+            test + "test_eq_38_and_39_44_at_least_radius",
+        ),
+    ]
+
+
+def _barker_elbow_row() -> Result:
+    """Barker eq. 45-46 against pinrate's auxiliary elbow control (:mod:`pinrate.control.elbow`)."""
+    elbow, shoulder = barker.auxiliary_elbow_deviation()
+    bends = ", ".join(f"{bend:+.2f}" for bend in barker.elbow_bends())
+    return Result(
+        "Barker eq. 45-46",
+        "near theta3 = 0: theta3 = K3 (TVEL)_X2, 0 for an outward command at theta3 = 0; "
+        "theta2 = -WE/(WE+ES) theta3 + K2 (TVEL)_Y2/(WE+ES); the sign of K3 changed at each entry "
+        "(the OCR's B28-B29 misplace a bracket: X2, Y2 are rows of R_2^1 R_1^0)",
+        f"singularity=auxiliary_elbow at theta3 = 0, 18 commands along X2 and Y2 on 3 arm poses, K2 = 1: "
+        f"max relative deviation {elbow:.1e} (theta3, eq. 45) and {shoulder:.1e} (theta2, eq. 46); "
+        f"theta3 after three retractions from full extension: {bends} rad",
+        "papers/test_barker.py::test_auxiliary_elbow_eq_45_46",
+    )
+
+
+def _barker_wrist_rows() -> list[Result]:
+    """Barker eq. 57-63 against pinrate's step (:mod:`pinrate.papers.barker`)."""
+    test = "papers/test_barker.py::"
+    off, at_zero = barker.wrist_generalized_inverse_deviation()
+    region_step, region_closed_form = barker.wrist_region_rates()
+    rules = barker.wrist_rule_deviations()
+    return [
+        Result(
+            "Barker eq. 57-60",
+            "(theta4, theta6) = M2* g2, M2 = [[0, S5], [1, C5]]; at theta5 = 0 M2* splits theta4 + theta6 equally",
+            f"MCA2 wrist rates vs eq. 49, 60: max relative deviation {off:.1e} off theta5 = 0; at theta5 = 0 "
+            f"(wrist=split) {at_zero:.1e} rad/s; inside the wrist region off 0 split keeps theta4 = theta6 "
+            f"(theta5 = 0.02: {region_step[0]:.2f}, {region_step[2]:.2f} rad/s) where M2^-1 gives "
+            f"{region_closed_form[0]:.1f}, {region_closed_form[2]:.1f} rad/s",
+            test + "test_wrist_eq_57_60",
+        ),
+        Result(
+            "Barker eq. 61-63",
+            "theta5 = 0: theta4 + theta6 = SAL3 D3 - CAL3 D2 shared equally (61), theta4 = 0 (62), "
+            "theta6 at its limit and theta4 takes it (63)",
+            f"MCA2 step vs the rule, max deviation: split {rules['split']:.0e}, hold_first {rules['hold_first']:.0e}, "
+            f"last_then_first {rules['last_then_first']:.0e} rad/s",
+            test + "test_wrist_rules_eq_61_63",
+        ),
+    ]
+
+
 def results() -> list[Result]:
     """Recompute every row (a few seconds)."""
     rows = [
@@ -585,6 +688,8 @@ def results() -> list[Result]:
             "papers/test_worked_examples.py::test_barker_singularities",
         )
     )
+    rows.extend(_barker_arm_rows())
+    rows.append(_barker_elbow_row())
     rows.append(
         Result(
             "Barker eq. 49-51",
@@ -593,6 +698,7 @@ def results() -> list[Result]:
             "papers/test_worked_examples.py::test_barker_wrist_rates",
         )
     )
+    rows.extend(_barker_wrist_rows())
     polar_a, polar_b = fig6()
     rows.append(
         Result(
@@ -646,12 +752,13 @@ def markdown(rows: list[Result]) -> str:
         "Generated by `pinrate paper` (`pinrate.papers`); `tests/papers/test_worked_examples.py` recomputes",
         "this file and fails when it differs. Every value is computed on the papers' robots of",
         "`pinrate.robots` (URDFs in `urdf/`); every test compares against a closed form derived by hand.",
-        "Misprints of the OCR'd papers, and how each was settled, are listed in the docstring of",
-        "`pinrate/papers/worked_examples.py`.",
+        "Misprints of the OCR'd papers, and how each was settled, are listed in the docstrings of",
+        "`pinrate/papers/worked_examples.py` and, for Barker's controller, `pinrate/papers/barker.py`.",
         "",
         "| result | the paper | pinrate | test |",
         "|---|---|---|---|",
     ]
     for row in rows:
-        lines.append(f"| {row.reference} | {row.paper} | {row.pinrate} | `{row.test}` |")
+        cells = (cell.replace("|", "\\|") for cell in (row.reference, row.paper, row.pinrate))
+        lines.append("| {} | {} | {} | `{}` |".format(*cells, row.test))
     return "\n".join(lines) + "\n"
