@@ -75,6 +75,8 @@ def measure(robot_name: str, *, batch: int, repeats: int, servo_steps: int) -> l
         functions[f"pinrate {algorithm} step"] = (step(algorithm), batch)
     controller = pinrate.Controller(robot, partition=partition)  # default safety: limits, decelerate
     functions["controller step, default safety (exact)"] = (lambda: controller.step(q, twist), batch)
+    guarded = pinrate.Controller(robot, partition=partition, collision=True)  # + the self-collision monitor
+    functions["controller step, self-collision (exact)"] = (lambda: guarded.step(q, twist), batch)
     functions["bare Pinocchio+numpy exact servo step"] = (bare_servo_step, batch)
     functions["pinrate full servo step (mca1)"] = (servo_step, 1)  # one run, divided below
     medians = interleaved_medians(functions, repeats)
@@ -115,6 +117,8 @@ def main() -> None:
         f"target: default controller step <= full servo step  measured {default:.2f}x  "
         f"{'met' if default <= 1 else 'NOT met'}"
     )
+    collision = timings["controller step, self-collision (exact)"] / timings["pinrate full servo step (mca1)"]
+    print(f"(the step with self-collision on costs {collision:.2f}x the full servo step)")
     bare = timings["bare Pinocchio+numpy exact servo step"] / floor
     print(f"(a servo step's bare Pinocchio+numpy calls alone cost {bare:.2f}x floor)")
 

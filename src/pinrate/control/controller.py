@@ -54,6 +54,7 @@ from ..solvers.generalized import damped_inverter, filtered_rates, generalized_i
 from ..solvers.rates import partition_rates, partition_spectral_radius
 from ..solvers.reference import Inverter
 from ..solvers.registry import check_algorithm
+from .collision import CollisionMonitor
 from .commands import JointJog, PoseGoal, Uncoupled, joint_rate_vector
 from .elbow import ELBOW_REGION, EXTENDED, Elbow, arm_frame, elbow_rate, find_elbow, remaining_rates
 from .posture import PostureJoints, null_space_motion, posture_joints
@@ -246,6 +247,13 @@ class Controller:
             toward the new ones by at most a·dt per joint, one factor for all joints, so the
             change keeps its direction (``Status.RATE_LIMITED``). Position limits and halts
             act at once, whatever the acceleration.
+        collision: False (the default), True, or a
+            :class:`~pinrate.control.collision.CollisionMonitor`: self-collision in the loop,
+            from the URDF's collision geometry less the SRDF's disabled pairs. A step that
+            brings two links closer is scaled down under the safety distance and halts before
+            the stop distance; motion that separates them is always executed
+            (``Status.DECELERATE_FOR_COLLISION``, ``Status.HALT_FOR_COLLISION``). A robot
+            without collision geometry is not monitored (a warning says so, once).
 
     Raises:
         InputError: an unknown algorithm or strategy (the message lists the valid ones), a
@@ -272,6 +280,7 @@ class Controller:
         posture: object = None,
         posture_gain: float = 1.0,
         acceleration_limits: object = None,
+        collision: object = False,
     ) -> None:
         self.robot = robot
         self.algorithm = check_algorithm(algorithm)
@@ -292,6 +301,8 @@ class Controller:
             None if acceleration_limits is None else self._per_joint(acceleration_limits, "acceleration_limits")
         )
         self._previous_rates = np.zeros(robot.nv)
+        self.collision = self._collision_monitor(collision)
+        """The self-collision monitor, or None."""
         self._rate_limit_rows = [
             (velocity, float(limit)) for velocity, limit in enumerate(self.velocity_limits) if math.isfinite(limit)
         ]
@@ -430,6 +441,18 @@ class Controller:
         if np.isnan(values).any() or (values <= 0).any():
             raise InputError(f"{what} must be positive (inf for none), got {values}")
         return values
+
+    def _collision_monitor(self, collision: object) -> CollisionMonitor | None:
+        if isinstance(collision, CollisionMonitor):
+            if collision.robot is not self.robot:
+                raise InputError("the CollisionMonitor was built for another Robot object; build it on this one")
+            return collision if collision.active else None
+        if collision is False or collision is None:
+            return None
+        if collision is True:
+            monitor = CollisionMonitor(self.robot)
+            return monitor if monitor.active else None
+        raise InputError(f"collision must be True, False or a CollisionMonitor, not {collision!r}")
 
     def reset(self) -> None:
         """Forget the rates applied last (the start of an acceleration-limited motion is at rest)."""
@@ -707,6 +730,14 @@ class Controller:
             details.append(f"rates scaled by {scale:.3g} to meet the velocity limits")
         if self.acceleration_limits is not None:
             rates = self._limit_acceleration(rates, statuses, details)
+        if self.collision is not None:
+            verdict = self.collision.limit(observation.q, rates, self.dt)
+            if verdict.status is Status.HALT_FOR_COLLISION:
+                return self._halt(observation, twist, verdict.detail, Status.HALT_FOR_COLLISION)
+            if verdict.scale < 1.0:
+                rates = rates * verdict.scale
+                statuses.append(verdict.status)
+                details.append(verdict.detail)
         next_q = self.robot.integrate(observation.q, rates, self.dt)
         if self.position_limits:
             hit = self._clamp(next_q)
@@ -717,18 +748,11 @@ class Controller:
         status = conditions[-1] if conditions else Status.OK
         return Step(next_q, rates, status, frozen, twist, observation, "; ".join(details), conditions)
 
-    def _halt(self, observation: Observation, twist: np.ndarray, detail: str) -> Step:
+    def _halt(
+        self, observation: Observation, twist: np.ndarray, detail: str, status: Status = Status.HALT_FOR_SINGULARITY
+    ) -> Step:
         self._previous_rates = np.zeros(self.robot.nv)
-        return Step(
-            observation.q.copy(),
-            np.zeros(self.robot.nv),
-            Status.HALT_FOR_SINGULARITY,
-            (),
-            twist,
-            observation,
-            detail,
-            (Status.HALT_FOR_SINGULARITY,),
-        )
+        return Step(observation.q.copy(), np.zeros(self.robot.nv), status, (), twist, observation, detail, (status,))
 
     # ------------------------------------------------------------------ singular region
     def _watched(

@@ -1,0 +1,232 @@
+"""Self-collision in the control loop: Pinocchio's collision model (coal), the SRDF's
+disabled pairs, and a velocity damper on the nearest pairs (Faverjon & Tournassoud 1987).
+
+The monitored pairs are every pair of collision geometries less: the pairs the SRDF next to
+the URDF disables (``<disable_collisions>``, as MoveIt's setup assistant writes them); pairs
+on the same joint or on a joint and its parent (their meshes touch at the joint); and,
+without an SRDF, pairs already within the stop distance at home or at the neutral pose
+(always in contact, as the setup assistant would find). Each mesh is replaced by its convex
+hull: it contains the mesh, so distances are conservative, and GJK on hulls is several times
+faster than on triangle meshes.
+
+For a pair at distance d (m) with nearest points p_a, p_b (world) and n = (p_b - p_a) / d,
+the step's joint rates q̇ move them apart at ḋ = n · (v_b(p_b) - v_a(p_a)) (m/s), each point's
+velocity from its joint's Jacobian (``LOCAL_WORLD_ALIGNED``) shifted to the point. A pair
+that approaches (ḋ < 0) under ``safety_distance`` limits the common scale s of all rates to
+
+    s <= (d - stop) / (safety - stop)        and        d + s ḋ dt >= stop,
+
+so the command slows as d falls and the step ends before ``stop_distance`` (a scale under
+:data:`HALT_SCALE` halts); a pair that
+separates (ḋ >= 0) never limits it, so motion away is always executed. The first-order
+prediction is checked at the integrated q when a pair is near: a step that would still end
+under the stop distance with that pair closer halts.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import NamedTuple
+
+import numpy as np
+import pinocchio as pin
+
+from ..checks import check_positive
+from ..errors import InputError
+from ..kinematics.manipulator import Robot
+from .status import Status
+
+SAFETY_DISTANCE = 0.05
+"""m: under this distance an approaching pair slows the step (MoveIt Servo's default scene
+threshold is 0.02 m; pinrate starts earlier and scales linearly)."""
+
+STOP_DISTANCE = 0.01
+"""m: a step that would bring a pair this close halts."""
+
+HALT_SCALE = 0.01
+"""A step the monitor would scale under this factor halts instead: the damper's scale falls to
+0 only as the distance reaches the stop distance, and creeping at 1 % of the command is a halt
+in all but name."""
+
+_WARNED: set[str] = set()
+
+
+class Proximity(NamedTuple):
+    """The nearest monitored pair: ``distance`` (m), the two links, their nearest points in
+    the world (m)."""
+
+    distance: float
+    first: str
+    second: str
+    first_point: np.ndarray
+    second_point: np.ndarray
+
+
+class CollisionVerdict(NamedTuple):
+    """What the monitor makes of a step: the factor for every rate (in [0, 1]), the status
+    (OK, DECELERATE_FOR_COLLISION or HALT_FOR_COLLISION) and a detail in words."""
+
+    scale: float
+    status: Status
+    detail: str
+
+
+class CollisionMonitor:
+    """The self-collision monitor of one robot (its own Pinocchio data: one per thread).
+
+    Args:
+        robot: the robot; its URDF's ``<collision>`` elements and the SRDF beside it.
+        safety_distance, stop_distance: m, 0 < stop < safety.
+
+    Attributes:
+        active: False when the robot has no collision geometry or no pair to watch (a warning
+            says so once per robot name); :meth:`limit` then always returns scale 1.
+        pairs: the monitored pairs, as (link, link) names.
+    """
+
+    def __init__(
+        self, robot: Robot, *, safety_distance: float = SAFETY_DISTANCE, stop_distance: float = STOP_DISTANCE
+    ) -> None:
+        self.robot = robot
+        self.safety_distance = check_positive(safety_distance, "safety_distance")
+        self.stop_distance = check_positive(stop_distance, "stop_distance")
+        if self.stop_distance >= self.safety_distance:
+            raise InputError(
+                f"stop_distance ({self.stop_distance} m) must be less than safety_distance ({self.safety_distance} m)"
+            )
+        model = robot.model
+        self._model = model
+        self._data = model.createData()
+        self._geometry = robot.collision_model.copy()
+        for geometry_object in self._geometry.geometryObjects:
+            _to_convex_hull(geometry_object)
+        self._geometry.addAllCollisionPairs()
+        if robot.srdf_path is not None:
+            pin.removeCollisionPairs(model, self._geometry, str(robot.srdf_path))
+        self._remove_adjacent_pairs()
+        self._geometry_data = pin.GeometryData(self._geometry)
+        if robot.srdf_path is None:
+            self._remove_pairs_in_contact([robot.home(), pin.neutral(model)])
+        objects = self._geometry.geometryObjects
+        self._pairs = [(pair.first, pair.second) for pair in self._geometry.collisionPairs]
+        self.pairs = tuple((self._link(objects[a]), self._link(objects[b])) for a, b in self._pairs)
+        self.active = bool(self._pairs)
+        if not self.active and robot.name not in _WARNED:
+            _WARNED.add(robot.name)
+            why = "has no collision geometry" if not self._geometry.ngeoms else "has no pair of links to watch"
+            warnings.warn(f"{robot.name}: self-collision is not monitored: the robot {why}", stacklevel=2)
+
+    def _link(self, geometry_object: pin.GeometryObject) -> str:
+        return self._model.frames[geometry_object.parentFrame].name
+
+    def _remove_adjacent_pairs(self) -> None:
+        """Pairs on one joint, or on a joint and its parent, touch at the joint by design."""
+        parents = self._model.parents
+        objects = self._geometry.geometryObjects
+        for pair in list(self._geometry.collisionPairs):
+            a, b = objects[pair.first].parentJoint, objects[pair.second].parentJoint
+            if a == b or parents[a] == b or parents[b] == a:
+                self._geometry.removeCollisionPair(pair)
+
+    def _remove_pairs_in_contact(self, configurations: list[np.ndarray]) -> None:
+        in_contact = set()
+        for q in configurations:
+            pin.computeDistances(self._model, self._data, self._geometry, self._geometry_data, q)
+            for index, result in enumerate(self._geometry_data.distanceResults):
+                if result.min_distance <= self.stop_distance:
+                    in_contact.add(index)
+        pairs = list(self._geometry.collisionPairs)
+        for index in sorted(in_contact, reverse=True):
+            self._geometry.removeCollisionPair(pairs[index])
+        self._geometry_data = pin.GeometryData(self._geometry)
+
+    # ------------------------------------------------------------------ measuring
+    def _distances(self, q: np.ndarray) -> np.ndarray:
+        pin.computeDistances(self._model, self._data, self._geometry, self._geometry_data, q)
+        return np.array([result.min_distance for result in self._geometry_data.distanceResults])
+
+    def nearest(self, q: object) -> Proximity | None:
+        """The nearest monitored pair at q (None when nothing is monitored)."""
+        if not self.active:
+            return None
+        distances = self._distances(self.robot.check_q(q))
+        index = int(np.argmin(distances))
+        result = self._geometry_data.distanceResults[index]
+        first, second = self.pairs[index]
+        return Proximity(
+            float(distances[index]),
+            first,
+            second,
+            np.array(result.getNearestPoint1()),
+            np.array(result.getNearestPoint2()),
+        )
+
+    def approach_rates(self, q: np.ndarray, joint_rates: np.ndarray, indices: list[int]) -> np.ndarray:
+        """ḋ (m/s) of the pairs ``indices`` under ``joint_rates``, after :meth:`_distances` at q."""
+        model, data = self._model, self._data
+        pin.computeJointJacobians(model, data, q)
+        objects = self._geometry.geometryObjects
+        rates = np.empty(len(indices))
+        for slot, index in enumerate(indices):
+            result = self._geometry_data.distanceResults[index]
+            first_point, second_point = np.array(result.getNearestPoint1()), np.array(result.getNearestPoint2())
+            direction = second_point - first_point
+            length = float(np.linalg.norm(direction))
+            normal = direction / length if length > 1e-9 else np.array(result.normal)
+            a, b = self._pairs[index]
+            velocity = self._point_velocity(objects[b].parentJoint, second_point, joint_rates) - self._point_velocity(
+                objects[a].parentJoint, first_point, joint_rates
+            )
+            rates[slot] = float(normal @ velocity)
+        return rates
+
+    def _point_velocity(self, joint: int, point: np.ndarray, joint_rates: np.ndarray) -> np.ndarray:
+        """World velocity (m/s) of ``point`` (world, m) fixed to ``joint``'s body."""
+        if joint == 0:
+            return np.zeros(3)
+        jacobian = pin.getJointJacobian(self._model, self._data, joint, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        twist = jacobian @ joint_rates
+        return twist[:3] + np.cross(twist[3:], point - np.array(self._data.oMi[joint].translation))
+
+    # ------------------------------------------------------------------ limiting
+    def limit(self, q: np.ndarray, joint_rates: np.ndarray, dt: float) -> CollisionVerdict:
+        """The verdict on a step of ``joint_rates`` (nv,) over ``dt`` (s) from q (see the module)."""
+        if not self.active:
+            return CollisionVerdict(1.0, Status.OK, "")
+        distances = self._distances(q)
+        near = [int(index) for index in np.flatnonzero(distances < self.safety_distance)]
+        if not near:
+            return CollisionVerdict(1.0, Status.OK, "")
+        approach = self.approach_rates(q, joint_rates, near)
+        span = self.safety_distance - self.stop_distance
+        scale, limiting = 1.0, -1
+        for index, rate in zip(near, approach, strict=True):
+            if rate >= 0.0:
+                continue  # separating: never limited
+            distance = float(distances[index])
+            allowed = min((distance - self.stop_distance) / span, (distance - self.stop_distance) / (-rate * dt))
+            if allowed < scale:
+                scale, limiting = max(allowed, 0.0), index
+        if scale > 0.0:
+            after = self._distances(self.robot.integrate(q, joint_rates * scale, dt))
+            closing = [i for i in near if after[i] < self.stop_distance and after[i] < distances[i]]
+            if closing:
+                scale, limiting = 0.0, closing[0]
+        if limiting < 0:
+            return CollisionVerdict(1.0, Status.OK, "")
+        first, second = self.pairs[limiting]
+        where = f"{first} and {second} are {distances[limiting]:.3g} m apart"
+        if scale < HALT_SCALE:
+            return CollisionVerdict(0.0, Status.HALT_FOR_COLLISION, f"{where}: halted before {self.stop_distance:g} m")
+        return CollisionVerdict(scale, Status.DECELERATE_FOR_COLLISION, f"{where}: rates scaled by {scale:.2g}")
+
+
+def _to_convex_hull(geometry_object: pin.GeometryObject) -> None:
+    """Replace a triangle mesh by its convex hull (conservative, and faster for GJK)."""
+    geometry = geometry_object.geometry
+    if hasattr(geometry, "buildConvexRepresentation") and geometry.num_tris > 0:
+        geometry.buildConvexRepresentation(False)
+        geometry_object.geometry = geometry.convex
+
+
+__all__ = ["HALT_SCALE", "SAFETY_DISTANCE", "STOP_DISTANCE", "CollisionMonitor", "CollisionVerdict", "Proximity"]
