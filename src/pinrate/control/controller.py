@@ -738,6 +738,8 @@ class Controller:
                 rates = rates * verdict.scale
                 statuses.append(verdict.status)
                 details.append(verdict.detail)
+        if self.acceleration_limits is not None:
+            self._previous_rates = rates.copy()  # the rates applied, after every scaling
         next_q = self.robot.integrate(observation.q, rates, self.dt)
         if self.position_limits:
             hit = self._clamp(next_q)
@@ -1086,7 +1088,7 @@ class Controller:
 
     def _limit_acceleration(self, rates: np.ndarray, statuses: list[Status], details: list[str]) -> np.ndarray:
         """previous + s (rates - previous), s the largest factor <= 1 keeping every change
-        within a·dt; remembers the result. Between two rate vectors within the velocity
+        within a·dt (the step remembers what it applies in the end). Between two rate vectors within the velocity
         limits, the result is within them too."""
         assert self.acceleration_limits is not None
         change = rates - self._previous_rates
@@ -1096,7 +1098,6 @@ class Controller:
             rates = self._previous_rates + change / worst
             statuses.append(Status.RATE_LIMITED)
             details.append(f"rates changed by {1.0 / worst:.3g} of the step's change to meet the acceleration limits")
-        self._previous_rates = rates.copy()
         return rates
 
     def _rate_scale(self, rates: np.ndarray) -> float:
