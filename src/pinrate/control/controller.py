@@ -245,8 +245,8 @@ class Controller:
             (nv,), in rad/s² or m/s². With limits, the controller remembers the rates it
             applied last (:meth:`reset` forgets them) and moves each step's rates from those
             toward the new ones by at most a·dt per joint, one factor for all joints, so the
-            change keeps its direction (``Status.RATE_LIMITED``). Position limits, the collision monitor and halts
-            act at once, whatever the acceleration.
+            change keeps its direction (``Status.RATE_LIMITED``). Position limits, the
+            collision monitor and halts act at once, whatever the acceleration.
         collision: False (the default), True, or a
             :class:`~pinrate.control.collision.CollisionMonitor`: self-collision in the loop,
             from the URDF's collision geometry less the SRDF's disabled pairs. A step that
