@@ -95,3 +95,14 @@ def test_uncoupled_moves_the_ur5_wrist_centre_with_the_linear_command_whatever_t
         np.testing.assert_allclose(tool.T @ velocity, linear, atol=1e-6)
         for name, rate in wrist.items():
             assert step.joint_rates[robot.joint_names.index(name)] == rate
+
+
+def test_a_jogged_joint_outside_the_partition_stops_at_its_limit() -> None:
+    robot = pinrate.load("panda")  # the fingers are not in the partition
+    controller = Controller(robot)
+    q = robot.home()
+    for _ in range(100):
+        step = controller.step(q, JointJog({"panda_finger_joint1": 0.1}))
+        q = step.q
+    _, upper = robot.joint_limits("panda_finger_joint1")
+    assert q[7] == upper and step.status is Status.JOINT_LIMIT and step.frozen == ("panda_finger_joint1",)

@@ -162,3 +162,21 @@ def test_acceleration_limits_bound_every_change_of_rate_and_keep_its_direction()
     assert np.all(np.abs(first.joint_rates) <= limits * controller.dt * (1 + 1e-12))  # from rest again
     with pytest.raises(InputError, match="acceleration_limits"):
         Controller(robot, acceleration_limits=-1.0)
+
+
+def test_a_joint_held_at_its_limit_stops_at_once_under_acceleration_limits() -> None:
+    robot = pinrate.load("ur5")
+    controller = Controller(robot, acceleration_limits=2.0, velocity_limits=np.inf)
+    _, upper = robot.joint_limits("elbow_joint")
+    q = robot.home()
+    q[2] = upper - 0.08
+    previous = np.zeros(6)
+    for _ in range(60):
+        step = controller.step(q, pinrate.JointJog({"elbow_joint": 1.0, "shoulder_pan_joint": 0.2}))
+        assert step.q[2] <= upper
+        if q[2] == upper:
+            assert step.joint_rates[2] == 0.0  # held: no phantom rate
+            # the other joint accelerates at its limit, not throttled by the held one
+            assert step.joint_rates[0] - previous[0] == pytest.approx(min(0.02, 0.2 - previous[0]), abs=1e-12)
+        previous, q = step.joint_rates, step.q
+    assert q[2] == upper and previous[0] == pytest.approx(0.2)

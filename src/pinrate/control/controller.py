@@ -37,7 +37,7 @@ import pinocchio as pin
 
 from ..checks import check_positive, check_vector
 from ..errors import InputError, SingularBlockError
-from ..kinematics.axes import local_axis, wrist_centre
+from ..kinematics.axes import wrist_axes, wrist_centre
 from ..kinematics.home import generic_ranks
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex, partition_for
@@ -323,17 +323,11 @@ class Controller:
         self.joggable: tuple[str, ...] = tuple(
             name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1
         )
-        self._wrist_axes = tuple(
-            (robot.joint_id(name), local_axis(model, robot.joint_id(name)))
-            for name in self.partition.wrist[:2]
-            if model.joints[robot.joint_id(name)].nq == 1
-        )
-        # The wrist centre rides on the body that carries the first wrist joint (or the tip's).
-        self._wrist_body = (
-            model.parents[robot.joint_id(self.partition.wrist[0])]
-            if self.partition.wrist
-            else model.frames[robot.tip_id].parentJoint
-        )
+        wrist_ids = [robot.joint_id(name) for name in self.partition.wrist]
+        self._wrist_axes = wrist_axes(model, wrist_ids)
+        # The wrist centre rides on the body that carries the first wrist joint of the chain
+        # (or the tip's body without a wrist).
+        self._wrist_body = model.parents[min(wrist_ids)] if wrist_ids else model.frames[robot.tip_id].parentJoint
         self._centre_data = model.createData()
         self.posture_gain = check_positive(posture_gain, "posture_gain")
         self._posture = self._posture_joints(posture)
@@ -408,9 +402,10 @@ class Controller:
         return weakest.value < self.singular_threshold and position in carrying_joints(weakest)
 
     def _position_limits(self) -> list[_Limit]:
-        """The partition's 1-DOF joints with finite position limits."""
+        """Every 1-DOF joint with finite position limits: a jog may move joints outside the
+        partition too."""
         limits = []
-        for joint in self.partition.joints:
+        for joint in self.robot.joint_names:
             bounds = self.robot.joint_limits(joint)
             if bounds is not None:
                 model = self.robot.model.joints[self.robot.joint_id(joint)]
@@ -729,7 +724,7 @@ class Controller:
             statuses.append(Status.RATE_LIMITED)
             details.append(f"rates scaled by {scale:.3g} to meet the velocity limits")
         if self.acceleration_limits is not None:
-            rates = self._limit_acceleration(rates, statuses, details)
+            rates = self._limit_acceleration(observation.q, rates, frozen, statuses, details)
         if self.collision is not None:
             verdict = self.collision.limit(observation.q, rates, self.dt)
             if verdict.status is Status.HALT_FOR_COLLISION:
@@ -1086,19 +1081,30 @@ class Controller:
         )
         return partition_rates(observation.jacobian, reduced.resolve(self.robot), twist, self.algorithm)
 
-    def _limit_acceleration(self, rates: np.ndarray, statuses: list[Status], details: list[str]) -> np.ndarray:
-        """previous + s (rates - previous), s the largest factor <= 1 keeping every change
-        within a·dt (the step remembers what it applies in the end). Between two rate vectors within the velocity
-        limits, the result is within them too."""
+    def _limit_acceleration(
+        self, q: np.ndarray, rates: np.ndarray, held: tuple[str, ...], statuses: list[Status], details: list[str]
+    ) -> np.ndarray:
+        """previous + s (rates - previous) on the joints not ``held`` (at a limit, frozen), s the
+        largest factor <= 1 keeping every change within a·dt; the held joints keep their rates,
+        and a joint the blend would carry past a limit stops on it. Between two rate vectors
+        within the velocity limits, the result is within them too. (The step remembers what
+        it applies in the end.)"""
         assert self.acceleration_limits is not None
         change = rates - self._previous_rates
+        for name in held:
+            change[self._velocity_of[name]] = 0.0  # position limits act at once
         largest = np.abs(change) / (self.acceleration_limits * self.dt)
         worst = float(largest.max(initial=0.0))
-        if worst > 1.0:
-            rates = self._previous_rates + change / worst
-            statuses.append(Status.RATE_LIMITED)
-            details.append(f"rates changed by {1.0 / worst:.3g} of the step's change to meet the acceleration limits")
-        return rates
+        if worst <= 1.0:
+            return rates
+        blended = self._previous_rates + change / worst
+        for name in held:
+            blended[self._velocity_of[name]] = rates[self._velocity_of[name]]
+        for limit in self._passing(q, blended, ()):
+            blended[limit.velocity] = limit.onto_the_limit(q, blended[limit.velocity], self.dt)
+        statuses.append(Status.RATE_LIMITED)
+        details.append(f"rates changed by {1.0 / worst:.3g} of the step's change to meet the acceleration limits")
+        return blended
 
     def _rate_scale(self, rates: np.ndarray) -> float:
         """The largest factor <= 1 that brings every rate within its velocity limit."""

@@ -55,7 +55,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from ..kinematics.axes import PARALLEL, Axis, distance_to_axis, local_axis, world_axis, wrist_centre
+from ..kinematics.axes import PARALLEL, Axis, distance_to_axis, local_axis, world_axis, wrist_axes, wrist_centre
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..solvers.conditioning import truncated_pinv
@@ -75,20 +75,18 @@ class Elbow:
 
     Attributes:
         joint, shoulder: joint names.
-        position, shoulder_position: partition positions of the two.
+        position: the elbow's partition position.
         elbow_axis, shoulder_axis: the two joints' ids and local axes.
         wrist: the first two revolute wrist joints, which locate the wrist centre.
         q_index: the elbow's index in q.
         straight: the elbow's value at full extension (rad).
         forearm: d_e, the wrist centre's distance from the elbow axis at full extension (m).
         reach: d_s, its distance from the shoulder axis at full extension (m).
-        same_sense: +1 when the two axes point the same way, -1 when opposite.
     """
 
     joint: str
     shoulder: str
     position: int
-    shoulder_position: int
     elbow_axis: Axis
     shoulder_axis: Axis
     wrist: tuple[Axis, ...]
@@ -96,7 +94,6 @@ class Elbow:
     straight: float
     forearm: float
     reach: float
-    same_sense: float
 
     def gain(self, region: float) -> float:
         """|K3| of eq. 45 (rad per m) for a region of ``region`` rad: d_s / (ES d_e sin β_r),
@@ -177,17 +174,13 @@ def find_elbow(robot: Robot, partition: Partition, singular_at: Callable[[np.nda
     home = robot.home()
     arm = list(partition.arm)
     positions = {name: position for position, name in enumerate(partition.arm + partition.wrist)}
-    wrist = tuple(
-        (robot.joint_id(name), local_axis(model, robot.joint_id(name)))
-        for name in partition.wrist[:2]
-        if _revolute(model, robot.joint_id(name))
-    )
+    wrist = wrist_axes(model, [robot.joint_id(name) for name in partition.wrist])
     pin.forwardKinematics(model, data, home)
     for name in sorted(arm, key=robot.joint_id):
         joint_id = robot.joint_id(name)
-        if not _revolute(model, joint_id):
+        elbow_axis = _revolute_axis(model, joint_id)
+        if elbow_axis is None:
             continue
-        elbow_axis = (joint_id, local_axis(model, joint_id))
         shoulder_axis = _shoulder_of(model, data, robot, arm, elbow_axis)
         if shoulder_axis is None:
             continue
@@ -209,7 +202,6 @@ def find_elbow(robot: Robot, partition: Partition, singular_at: Callable[[np.nda
             joint=name,
             shoulder=shoulder,
             position=positions[name],
-            shoulder_position=positions[shoulder],
             elbow_axis=elbow_axis,
             shoulder_axis=shoulder_axis,
             wrist=wrist,
@@ -217,15 +209,15 @@ def find_elbow(robot: Robot, partition: Partition, singular_at: Callable[[np.nda
             straight=straight,
             forearm=distance_to_axis(centre, np.array(data.oMi[joint_id].translation), z_e),
             reach=distance_to_axis(centre, np.array(data.oMi[shoulder_axis[0]].translation), z_s),
-            same_sense=1.0 if float(z_e @ z_s) > 0.0 else -1.0,
         )
     return None
 
 
-def _revolute(model: pin.Model, joint_id: int) -> bool:
-    """A 1-DOF joint with one q that turns (not prismatic)."""
+def _revolute_axis(model: pin.Model, joint_id: int) -> Axis | None:
+    """The joint and its axis when it turns with one q (its bend is q - straight), else None."""
     joint = model.joints[joint_id]
-    return joint.nq == 1 and joint.nv == 1 and "P" not in joint.shortname().removeprefix("JointModel")[:1]
+    axis = local_axis(model, joint_id) if joint.nq == 1 and joint.nv == 1 else None
+    return None if axis is None else (joint_id, axis)
 
 
 def _shoulder_of(model: pin.Model, data: pin.Data, robot: Robot, arm: list[str], elbow_axis: Axis) -> Axis | None:
@@ -235,8 +227,8 @@ def _shoulder_of(model: pin.Model, data: pin.Data, robot: Robot, arm: list[str],
     z_e = world_axis(data, elbow_axis)
     ancestor = model.parents[elbow_axis[0]]
     while ancestor > 0:
-        if ancestor in arm_ids and _revolute(model, ancestor):
-            candidate = (ancestor, local_axis(model, ancestor))
+        candidate = _revolute_axis(model, ancestor) if ancestor in arm_ids else None
+        if candidate is not None:
             z_s = world_axis(data, candidate)
             if np.linalg.norm(np.cross(z_s, z_e)) < PARALLEL and upper_arm_frame(
                 np.array(data.oMi[ancestor].translation), z_s, np.array(data.oMi[elbow_axis[0]].translation)

@@ -18,15 +18,30 @@ Axis = tuple[int, tuple[float, float, float]]
 """A revolute joint: its Pinocchio id and its unit axis in its own joint frame."""
 
 
-def local_axis(model: pin.Model, joint_id: int) -> tuple[float, float, float]:
-    """The unit axis of a 1-DOF revolute joint in its own frame: the angular part of its
-    motion subspace (unit joint velocity)."""
+def local_axis(model: pin.Model, joint_id: int) -> tuple[float, float, float] | None:
+    """The unit axis of a 1-DOF rotating joint in its own frame (the angular part of its motion
+    subspace: unit joint velocity); None for a joint that does not rotate (prismatic)."""
     data = model.createData()
     velocity = np.zeros(model.nv)
     velocity[model.joints[joint_id].idx_v] = 1.0
     pin.forwardKinematics(model, data, pin.neutral(model), velocity)
     angular = np.array(data.v[joint_id].angular)
-    return tuple(float(value) for value in angular / np.linalg.norm(angular))  # type: ignore[return-value]
+    norm = float(np.linalg.norm(angular))
+    if norm < PARALLEL:
+        return None
+    return tuple(float(value) for value in angular / norm)  # type: ignore[return-value]
+
+
+def wrist_axes(model: pin.Model, joint_ids: list[int]) -> tuple[Axis, ...]:
+    """The first two rotating 1-DOF joints among ``joint_ids`` in chain order (Pinocchio's ids
+    grow from the base), with their axes: the joints that locate the wrist centre."""
+    axes: list[Axis] = []
+    for joint_id in sorted(joint_ids):
+        if model.joints[joint_id].nv == 1 and len(axes) < 2:
+            axis = local_axis(model, joint_id)
+            if axis is not None:
+                axes.append((joint_id, axis))
+    return tuple(axes)
 
 
 def world_axis(data: pin.Data, axis: Axis) -> np.ndarray:
@@ -63,4 +78,4 @@ def distance_to_axis(point: np.ndarray, origin: np.ndarray, axis: np.ndarray) ->
     return float(np.linalg.norm(offset - (offset @ axis) * axis))
 
 
-__all__ = ["PARALLEL", "Axis", "distance_to_axis", "local_axis", "world_axis", "wrist_centre"]
+__all__ = ["PARALLEL", "Axis", "distance_to_axis", "local_axis", "world_axis", "wrist_axes", "wrist_centre"]
