@@ -81,3 +81,16 @@ def test_bad_posture_options_are_input_errors() -> None:
         Controller(robot, posture=np.zeros(3))
     with pytest.raises(InputError, match="posture_gain"):
         Controller(robot, posture="home", posture_gain=0.0)
+
+
+def test_the_posture_task_gives_way_before_a_velocity_limit_slows_the_twist() -> None:
+    robot = pinrate.load("panda")
+    q = robot.home()
+    q[0] = 2.88  # near its limit: the limit term pushes hard
+    twist = np.array([0.2, 0.0, 0.0, 0.0, 0.0, 0.0])
+    with_posture = Controller(robot, posture="home", posture_gain=5.0).step(q, twist)
+    plain = Controller(robot).step(q, twist)
+    np.testing.assert_allclose(
+        robot.jacobian(q) @ with_posture.joint_rates, robot.jacobian(q) @ plain.joint_rates, atol=1e-9
+    )
+    assert np.all(np.abs(with_posture.joint_rates) <= Controller(robot).velocity_limits + 1e-12)

@@ -377,6 +377,21 @@ class Controller:
         rates[index.columns[kept]] = null_space_motion(scaled, descent[kept], self.singular_threshold)
         return rates
 
+    def _null_room(self, task: np.ndarray, null: np.ndarray) -> float:
+        """The largest α in [0, 1] keeping task + α null within the velocity limits (0 when the
+        task alone exceeds one): the secondary motion gives way before a velocity limit can
+        scale the commanded twist."""
+        room = 1.0
+        task_values, null_values = task.tolist(), null.tolist()
+        for velocity, limit in self._rate_limit_rows:
+            rate, extra = task_values[velocity], null_values[velocity]
+            if extra == 0.0:
+                continue
+            if abs(rate) >= limit:
+                return 0.0
+            room = min(room, (limit - math.copysign(1.0, extra) * rate) / abs(extra))
+        return max(room, 0.0)
+
     def _slow_bend(self, elbow: Elbow) -> float:
         """The bend from full extension (rad, toward home's side, others at home) at which c of
         the measured blocks reaches ``slow_threshold``, by bisection; at most ELBOW_REGION."""
@@ -581,7 +596,9 @@ class Controller:
             task = solve
 
             def solve(left_out: frozenset[str]) -> np.ndarray:
-                return task(left_out) + self._null_motion(observation, left_out)
+                rates = task(left_out)
+                null = self._null_motion(observation, left_out)
+                return rates + self._null_room(rates, null) * null
 
         try:
             rates = solve(frozenset())

@@ -3,7 +3,9 @@ limits, in the null space of the commanded twist (Liégeois 1977).
 
 The rates are q̇ = q̇_task + N (-k ∇H), N = I - J⁺ J the projector onto the null space of J
 (the partition's rows and columns, linear rows over the characteristic length), so that
-J q̇ = J q̇_task: the twist is untouched, and the secondary motion descends
+J q̇ = J q̇_task: the twist is untouched, and the secondary motion descends (under a
+velocity limit, the controller shrinks N(-k ∇H) first, so the limit never slows the twist
+on its account)
 
     H(q) = ½ Σ_i ((q_i - p_i) / r_i)²  +  ½ Σ_i (max(0, 1 - d_i / (μ r_i)) )²
 
