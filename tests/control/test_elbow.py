@@ -142,7 +142,7 @@ def test_ur5_retracts_the_hand_toward_the_shoulder_at_full_extension() -> None:
     # Toward the shoulder, on the line (eq. 46 cancels the elbow's motion across it) ...
     assert moved @ inward > 0.02
     assert np.linalg.norm(moved - (moved @ inward) * inward) < 0.05 * (moved @ inward)
-    # ... where the generalized inverse of the default strategy cuts the lost direction.
+    # ... where the default strategy (decelerate, on the generalized inverse) cuts the lost direction.
     assert retract(Controller(robot), start) @ inward < 0.1 * (moved @ inward)
 
 
@@ -167,3 +167,14 @@ def test_the_default_region_is_the_elbows_singular_region() -> None:
     assert Controller(robot, singularity="auxiliary_elbow", elbow_region=0.05).elbow_region == 0.05
     with pytest.raises(InputError, match="elbow_region"):
         Controller(robot, singularity="auxiliary_elbow", elbow_region=-0.1)
+
+
+def test_the_wrist_rule_applies_inside_the_elbow_region() -> None:
+    robot = pinrate.load("ur5")
+    q = robot.home()
+    q[1:3] = -0.8, 0.1  # in the elbow's region
+    q[4] = 0.04  # wrist_2 near 0: wrist_1 and wrist_3 nearly aligned
+    step = Controller(robot, singularity="auxiliary_elbow").step(q, np.array([0.0, 0.0, 0.0, 0.2, 0.0, 0.0]))
+    assert Status.AUXILIARY_ELBOW in step.conditions and Status.WRIST_SINGULARITY in step.conditions
+    assert "wrist_1_joint and wrist_3_joint" in step.detail
+    assert np.abs(step.joint_rates).max() < 0.5  # the aligned pair shares the rotation, no spike

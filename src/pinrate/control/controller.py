@@ -905,17 +905,27 @@ class Controller:
         outward = float(frame.outward @ world_linear)
         way = "retracts" if outward < 0.0 else "straightens" if abs(bend) > EXTENDED else "holds (outward command)"
         details = [f"{elbow.joint} {abs(bend):.3g} rad from full extension: auxiliary elbow control, the elbow {way}"]
-        if index.wrist_columns.size >= 2:
-            wrist = conditioning(self._reduced(observation.jacobian), m, n_arm, ("W",), self._row_scale, self._ranks)
-            rule = self._wrist_rule(wrist, n_arm) if wrist.value < self.slow_threshold else None
-            if rule is not None:
-                dropped, merged, released_by, detail = rule
-                statuses.append(Status.WRIST_SINGULARITY)
-                details.append(detail)
+        rows = np.array([commanded.T @ world for world in directions]).reshape(len(directions), m)
+        # The rows left to the joints other than the elbow: near singular, they are the wrist's
+        # (two aligned axes: the wrist rule) or another block's (the generalized inverse cuts).
+        others = ColumnMap.of(n_arm, index.wrist_columns.size, frozenset([elbow.position]), None).matrix
+        left = self._auxiliary_rows(observation, rows) @ others
+        if left.size:
+            value, motion = inverse_condition(left, min(left.shape))
+            if value < self.slow_threshold:
+                weakest = Conditioning(value, "rows left to the other joints", others @ motion)
+                rule = self._wrist_rule(weakest, n_arm)
+                if rule is not None:
+                    dropped, merged, released_by, detail = rule
+                    statuses.append(Status.WRIST_SINGULARITY)
+                    details.append(detail)
+                else:
+                    statuses.append(Status.NEAR_SINGULARITY)
+                    details.append(f"the rows left to the other joints are near singular (c = {value:.2g})")
         return _Auxiliary(
             bend,
             outward,
-            np.array([commanded.T @ world for world in directions]).reshape(len(directions), m),
+            rows,
             np.array([float(world @ world_linear) for world in directions]),
             dropped,
             merged,
@@ -946,17 +956,22 @@ class Controller:
         columns = ColumnMap.of(
             index.arm_columns.size, index.wrist_columns.size, dropped | {elbow.position}, auxiliary.merged
         )
-        reduced = self._reduced(observation.jacobian)
-        linear = auxiliary.directions @ reduced[:m]  # velocities along p (and n) per joint rate
-        length = self.characteristic_length  # linear rows in m/L, as the generalized inverse's rows
-        matrix = np.vstack([linear / length, reduced[m:]])
-        target = np.concatenate([auxiliary.targets / length, twist[m:]])
+        matrix = self._auxiliary_rows(observation, auxiliary.directions)
+        target = np.concatenate([auxiliary.targets / self.characteristic_length, twist[m:]])
         partition_rates += remaining_rates(
             matrix, target - matrix @ partition_rates, columns.matrix, self.singular_threshold
         )
         rates = np.zeros(self.robot.nv)
         rates[index.columns] = partition_rates
         return rates
+
+    def _auxiliary_rows(self, observation: Observation, directions: np.ndarray) -> np.ndarray:
+        """The rows solved under auxiliary elbow control (r + k, n): the velocities along
+        ``directions`` (p, and n when commanded; over the sensor's linear axes) per joint rate,
+        over the characteristic length as the generalized inverse's rows, then J's angular rows."""
+        reduced = self._reduced(observation.jacobian)
+        linear = directions @ reduced[: self.index.m]
+        return np.vstack([linear / self.characteristic_length, reduced[self.index.m :]])
 
     def _reach_extension(self, bend: float, rates: np.ndarray, next_q: np.ndarray) -> None:
         """After a step under auxiliary elbow control: a step that ends at full extension puts
