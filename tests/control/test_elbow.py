@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 import pinrate
-from pinrate import Controller, InputError, Status
+from pinrate import Controller, InputError, JointJog, Status
 from pinrate.papers.barker import upper_arm_axes
 
 UNLIMITED = {"velocity_limits": np.inf, "position_limits": False}
@@ -178,3 +178,20 @@ def test_the_wrist_rule_applies_inside_the_elbow_region() -> None:
     assert Status.AUXILIARY_ELBOW in step.conditions and Status.WRIST_SINGULARITY in step.conditions
     assert "wrist_1_joint and wrist_3_joint" in step.detail
     assert np.abs(step.joint_rates).max() < 0.5  # the aligned pair shares the rotation, no spike
+
+
+def test_a_jog_to_full_extension_also_turns_the_next_bend_and_reset_restores_it() -> None:
+    robot = pinrate.robots.barker_arm()
+    controller = Controller(robot, singularity="auxiliary_elbow", velocity_limits=np.inf)
+    straight = controller.elbow.straight
+    q = barker_at_extension(0.2, 0.5)
+    q[2] = straight + 0.03
+    while q[2] - straight > 0.0:  # jog the elbow straight
+        q = controller.step(q, JointJog({"theta3": -(q[2] - straight) / controller.dt})).q
+    assert q[2] == straight
+    x2, _, _ = barker_axes(q)
+    retract = twist_for(robot, q, -0.05 * x2)
+    assert controller.step(q, retract).joint_rates[2] < 0.0  # it came from +: it bends to -
+    controller.reset()
+    home_side = math.copysign(1.0, robot.home()[2] - straight)
+    assert math.copysign(1.0, controller.step(q, retract).joint_rates[2]) == home_side

@@ -339,7 +339,8 @@ class Controller:
             self.elbow = find_elbow(robot, self.partition, self._singular_with)
             if self.elbow is not None:
                 bent = float(robot.home()[self.elbow.q_index]) - self.elbow.straight
-                self._bend_sign = -1.0 if bent < 0.0 else 1.0  # the first bend goes the home's way
+                self._first_bend_sign = -1.0 if bent < 0.0 else 1.0  # the first bend goes the home's way
+                self._bend_sign = self._first_bend_sign
                 if elbow_region is None:
                     self.elbow_region = self._slow_bend(self.elbow)
 
@@ -465,8 +466,12 @@ class Controller:
         raise InputError(f"collision must be True, False or a CollisionMonitor, not {collision!r}")
 
     def reset(self) -> None:
-        """Forget the rates applied last (the start of an acceleration-limited motion is at rest)."""
+        """Forget what earlier steps left: the rates applied last (an acceleration-limited
+        motion starts at rest) and the side of the elbow's last bend (the next bend from full
+        extension goes the home's way)."""
         self._previous_rates = np.zeros(self.robot.nv)
+        if self.elbow is not None:
+            self._bend_sign = self._first_bend_sign
 
     # ------------------------------------------------------------------ seeing
     def observe(self, q: object, goal: PoseGoal | None = None) -> Observation:
@@ -614,10 +619,7 @@ class Controller:
                 rates = rates * scale
                 statuses.append(status)
                 details.append(detail)  # NEAR_SINGULARITY: a way out, scale 1
-        step = self._finish(observation, twist, rates, statuses, details, frozen)
-        if auxiliary is not None:
-            self._reach_extension(auxiliary.bend, step.joint_rates, step.q)
-        return step
+        return self._finish(observation, twist, rates, statuses, details, frozen)
 
     # ------------------------------------------------------------------ other commands
     def _jog(self, observation: Observation, jog: JointJog) -> Step:
@@ -753,6 +755,8 @@ class Controller:
         if self.acceleration_limits is not None:
             self._previous_rates = rates.copy()  # the rates applied, after every scaling
         next_q = self.robot.integrate(observation.q, rates, self.dt)
+        if self.elbow is not None:
+            self._reach_extension(observation.q, next_q)
         if self.position_limits:
             hit = self._clamp(next_q)
             if hit and Status.JOINT_LIMIT not in statuses:
@@ -973,14 +977,17 @@ class Controller:
         linear = directions @ reduced[: self.index.m]
         return np.vstack([linear / self.characteristic_length, reduced[self.index.m :]])
 
-    def _reach_extension(self, bend: float, rates: np.ndarray, next_q: np.ndarray) -> None:
-        """After a step under auxiliary elbow control: a step that ends at full extension puts
-        the elbow exactly there, and the next bend from it goes the other way."""
+    def _reach_extension(self, q: np.ndarray, next_q: np.ndarray) -> None:
+        """After any step (a twist, a jog, a playback): a step that brings the elbow to full
+        extension puts it exactly there, and one that reaches or crosses it makes the next bend
+        from full extension go the other way (Barker: K3 changes sign each time)."""
         elbow = self.elbow
         assert elbow is not None
-        after = bend + float(rates[self.index.columns[elbow.position]]) * self.dt
+        bend = float(q[elbow.q_index]) - elbow.straight
+        after = float(next_q[elbow.q_index]) - elbow.straight
         if abs(bend) > EXTENDED and (abs(after) <= EXTENDED or after * bend < 0.0):
-            next_q[elbow.q_index] = elbow.straight
+            if abs(after) <= EXTENDED:
+                next_q[elbow.q_index] = elbow.straight
             self._bend_sign = -math.copysign(1.0, bend)
 
     def _wrist_rule(
