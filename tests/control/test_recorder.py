@@ -96,3 +96,29 @@ def test_a_playback_step_is_a_controller_step_with_its_limits() -> None:
     recorder.record(0.5, q)
     step = recorder.playback(Controller(robot, velocity_limits=1.0)).step(q)
     assert step.status is Status.RATE_LIMITED and abs(step.joint_rates[0]) == pytest.approx(1.0)
+
+
+def test_bad_configurations_are_input_errors_and_a_stuck_playback_ends() -> None:
+    recorder = Recorder()
+    with pytest.raises(InputError, match="vector of numbers"):
+        recorder.record(0.0, "abc")
+    recorder.record(0.0, np.zeros(6))
+    with pytest.raises(InputError, match="shape"):
+        recorder.record(0.1, np.zeros(5))
+    robot = pinrate.load("ur5")
+    beyond = robot.home()
+    beyond[2] = robot.joint_limits("elbow_joint")[1] + 0.5  # recorded past a limit: unreachable
+    stuck = Recorder()
+    stuck.record(0.0, beyond)
+    at_limit = robot.home()
+    at_limit[2] = robot.joint_limits("elbow_joint")[1]
+    stuck.record(0.01, at_limit)
+    playback = stuck.playback(Controller(robot))
+    q = at_limit
+    for _ in range(10):
+        if playback.done:
+            break
+        q = playback.step(q).q
+    assert playback.done and "could not move" in playback.stopped
+    with pytest.raises(InputError, match="coordinates"):
+        stuck.playback(Controller(pinrate.load("panda")))

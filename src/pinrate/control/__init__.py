@@ -2,8 +2,21 @@
 
 from .commands import JointJog, PoseGoal, Uncoupled
 from .controller import Controller, Observation, Step
+from .recorder import Playback, Recorder
 from .servo_loop import servo
 from .status import Status
 from .trajectory import Trajectory
 
-__all__ = ["Controller", "JointJog", "Observation", "PoseGoal", "Status", "Step", "Trajectory", "Uncoupled", "servo"]
+__all__ = [
+    "Controller",
+    "JointJog",
+    "Observation",
+    "Playback",
+    "PoseGoal",
+    "Recorder",
+    "Status",
+    "Step",
+    "Trajectory",
+    "Uncoupled",
+    "servo",
+]

@@ -96,7 +96,9 @@ class Uncoupled:
     The wrist centre is where the first two wrist axes meet (the middle of their common
     perpendicular when they do not; :func:`pinrate.kinematics.axes.wrist_centre`), a point
     of the arm's last body: the wrist joints do not move it, so arm and wrist are uncoupled
-    (Barker, "Wrist-centre decoupling")."""
+    (Barker, "Wrist-centre decoupling"). The arm's wrist-centre block is inverted by the
+    generalized inverse whatever ``singularity=`` is (``Status.NEAR_SINGULARITY`` under the
+    slow threshold, no deceleration); the velocity limits bound the rates."""
 
     linear: np.ndarray
     wrist: Mapping[str, float] = field(default_factory=dict)

@@ -7,10 +7,11 @@ reversing a motion": the operator's evacuation along the way the hand came).
 recorded: each step commands the joint rates that reach the configuration recorded τ seconds
 before the newest, τ advancing by the controller's dt per step, as a :class:`JointJog`
 through :meth:`Controller.step`, so every limit of the controller applies. A step slowed by a
-limit advances τ only by the share it achieved: the playback falls behind the clock, never
-off the path. Between two samples the configuration is interpolated on the configuration
-space (``pinocchio.interpolate``), so the path stays within the joint limits that both ends
-respect.
+limit advances τ only by the share it achieved: the playback falls behind the clock and
+stays on the path (an acceleration limit or a joint held at a limit bends it as little as
+they allow); a step that cannot move at all ends the playback. Between two samples the
+configuration is interpolated on the configuration space (``pinocchio.interpolate``), so the
+path stays within the joint limits that both ends respect.
 """
 
 from __future__ import annotations
@@ -59,11 +60,20 @@ class Recorder:
             raise InputError(f"time must be finite, got {stamp}")
         if self._times and stamp < self._times[-1]:
             raise InputError(f"time {stamp} s is before the newest sample's {self._times[-1]} s")
+        try:
+            configuration = np.array(q, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"q must be a vector of numbers, not {type(q).__name__}") from None
+        shape = self._configurations[0].shape if self._configurations else None
+        if configuration.ndim != 1 or (shape is not None and configuration.shape != shape):
+            raise InputError(f"q must have the shape of the recorded ones {shape}, got {configuration.shape}")
+        if not np.isfinite(configuration).all():
+            raise InputError("q contains NaN or inf")
         if self._times and stamp == self._times[-1]:
             self._times.pop()
             self._configurations.pop()
         self._times.append(stamp)
-        self._configurations.append(np.array(q, dtype=float))
+        self._configurations.append(configuration)
         while self._times[0] < stamp - self.history:
             self._times.popleft()
             self._configurations.popleft()
@@ -85,6 +95,11 @@ class Recorder:
 
     def playback(self, controller: Controller) -> Playback:
         """A backward playback of the recorded window through ``controller`` (see the module)."""
+        if self._configurations and self._configurations[0].shape != (controller.robot.nq,):
+            raise InputError(
+                f"the recording holds configurations of {self._configurations[0].shape[0]} coordinates, "
+                f"{controller.robot.name!r} has {controller.robot.nq}"
+            )
         if len(self._times) < 2:
             raise InputError("nothing to play back: the recorder holds fewer than two samples")
         return Playback(controller, self.times, self.configurations)
@@ -95,7 +110,9 @@ class Playback:
 
     Attributes:
         elapsed: τ (s), how far back along the recording the playback has come.
-        done: the oldest configuration is reached.
+        done: the oldest configuration is reached, or a step could not move at all (a joint
+            held at a limit, a halt): a loop ``while not playback.done`` always ends.
+        stopped: why it ended early, in words ("" when it reached the oldest configuration).
     """
 
     def __init__(self, controller: Controller, times: np.ndarray, configurations: np.ndarray) -> None:
@@ -105,6 +122,7 @@ class Playback:
         self.duration = float(times[-1] - times[0])
         self.elapsed = 0.0
         self.done = False
+        self.stopped = ""
 
     def target(self, elapsed: float) -> np.ndarray:
         """The configuration recorded ``elapsed`` seconds before the newest (interpolated)."""
@@ -133,6 +151,9 @@ class Playback:
         self.elapsed = min(self.elapsed + controller.dt * min(achieved, 1.0), self.duration)
         if ahead >= self.duration and achieved >= 1.0 - 1e-12:
             self.done = True
+        elif requested_norm > 0.0 and achieved <= 1e-12:
+            self.done = True
+            self.stopped = f"the playback could not move ({step.status.value}: {step.detail})"
         return step
 
 
