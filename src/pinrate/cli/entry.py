@@ -9,8 +9,9 @@ terminated (SIGTERM), 141 its output pipe closed (``| head``).
 The CLI owns SIGINT: CPython raises KeyboardInterrupt only when SIGINT was at its default
 disposition at start-up, and a background job of a non-interactive shell inherits it
 ignored, so a ``pinrate demo`` started that way would never hear Ctrl-C. Heavy imports
-(Pinocchio, matplotlib) happen inside the guarded region, so an interrupt while they load
-ends as cleanly as one during the run.
+(Pinocchio, matplotlib) happen inside the guarded region with signals deferred: an
+interrupt while they load is recorded and raised as soon as they end (within about a
+second), as cleanly as one during the run.
 """
 
 from __future__ import annotations
@@ -48,12 +49,17 @@ class _Signals:
     """
 
     seen: int | None = None
+    deferring = False
+    """While True (the heavy imports), a signal is only recorded and raised when they end: an
+    exception raised inside a pybind11 module's initialisation (matplotlib's ft2font) becomes
+    "ImportError: initialization failed" and can abort the process."""
     default_unraisable = staticmethod(sys.__unraisablehook__)
 
     @classmethod
     def handle(cls, signum: int, frame: FrameType | None) -> None:
         cls.seen = signum
-        raise cls.exception(signum)
+        if not cls.deferring:
+            raise cls.exception(signum)
 
     @staticmethod
     def exception(signum: int) -> BaseException:
@@ -79,9 +85,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (see the module docstring)."""
     previous = _own_signals()
     try:
-        from .commands import run  # inside the guard: importing Pinocchio takes a second
-
-        _Signals.raise_swallowed()  # a signal while importing, swallowed by the extension
+        _Signals.deferring = True
+        try:
+            from .commands import run  # inside the guard: importing Pinocchio takes a second
+        finally:
+            _Signals.deferring = False
+        _Signals.raise_swallowed()  # a signal while importing: deferred, or swallowed by an extension
         return run(argv)
     except KeyboardInterrupt:
         _quiet_print("pinrate: interrupted")
