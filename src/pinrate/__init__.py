@@ -4,7 +4,7 @@ Sensor-frame Jacobians (Shoham & Koren 1987, eq. 1-16), the arm/wrist partition 
 the motion control algorithms MCA1/MCA2/MCA3 (eq. 23-54) and their convergence Theorem,
 and a closed-loop servo, all on Pinocchio. The public API is listed in ``__all__``; the
 subpackages, bottom to top: ``kinematics``, ``robots`` and ``solvers``, ``theorem``,
-``control``, ``viewer`` and ``analysis``, ``papers``, ``cli``.
+``control``, ``viewer`` and ``analysis``, ``teleop``, ``papers``, ``cli``.
 
 The names are imported on first use (PEP 562), so ``import pinrate`` and the command line
 start without loading Pinocchio until they need it.
@@ -34,6 +34,7 @@ _SOURCES = {
     "SingularBlockError": "errors",
     "Status": "control",
     "Step": "control",
+    "Teleop": "teleop",
     "Trajectory": "control",
     "Uncoupled": "control",
     "convergence": "theorem",
@@ -59,6 +60,7 @@ __all__ = [
     "SingularBlockError",
     "Status",
     "Step",
+    "Teleop",
     "Trajectory",
     "Uncoupled",
     "__version__",
@@ -77,6 +79,7 @@ if TYPE_CHECKING:
     from .kinematics import Partition, Robot
     from .robots import load
     from .solvers import ALGORITHMS, joint_rates
+    from .teleop import Teleop
     from .theorem import Convergence, ConvergenceSample, convergence, sample_convergence
 
 

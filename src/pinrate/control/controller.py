@@ -493,7 +493,12 @@ class Controller:
     def conditioning(self, q: object) -> Conditioning:
         """The least inverse condition number σ_r/σ_1 of the blocks the algorithm inverts at q,
         which block, and its weakest joint motion (:mod:`pinrate.control.singularity`)."""
-        return self._conditioning(self._reduced(self.observe(q).jacobian), self.index.arm_columns.size)
+        return self.observed_conditioning(self.observe(q))
+
+    def observed_conditioning(self, observation: Observation) -> Conditioning:
+        """:meth:`conditioning` from an observation already made: no kinematics, so another
+        thread (a display) may call it beside the control loop."""
+        return self._conditioning(self._reduced(observation.jacobian), self.index.arm_columns.size)
 
     def _reduced(self, jacobian: np.ndarray) -> np.ndarray:
         """J restricted to the partition (m + k, n), partition order."""

@@ -78,6 +78,12 @@ class Recorder:
             self._times.popleft()
             self._configurations.popleft()
 
+    def truncate(self, time: float) -> None:
+        """Drop the samples recorded after ``time`` (s): what a playback has retraced."""
+        while self._times and self._times[-1] > time:
+            self._times.pop()
+            self._configurations.pop()
+
     def clear(self) -> None:
         """Forget every sample."""
         self._times.clear()

@@ -38,6 +38,7 @@ from ..checks import as_pose, check_output_file, check_positive, check_vector
 from ..control.trajectory import Trajectory
 from ..errors import InputError
 from ..kinematics.manipulator import Robot, check_robot
+from .offline import SceneCommands
 from .server import MeshcatServer, check_reachable
 
 ROOT = "pinrate"
@@ -56,6 +57,30 @@ def triad(length: float = 0.1, width: float = 3.0, opacity: float = 1.0) -> tupl
             g.LineBasicMaterial(vertexColors=True, linewidth=width, opacity=opacity),
         ),
     )
+
+
+AXIS_COLOURS = (0xD62728, 0x2CA02C, 0x1F77B4)
+"""x red, y green, z blue: the colours of every drawn frame's axes."""
+
+
+def arrow_parts(axis: int, length: float, radius: float) -> list[tuple[str, g.Cylinder, np.ndarray]]:
+    """(name, geometry, transform in the frame) of a shaft and a cone head along ``axis``
+    (meshcat's cylinders stand along their own y axis, centred on their origin)."""
+    turn = np.eye(4)
+    if axis == 0:  # y -> x: a quarter turn about -z
+        turn[:3, :3] = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]
+    elif axis == 2:  # y -> z: a quarter turn about x
+        turn[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+    direction = np.zeros(3)
+    direction[axis] = 1.0
+    shaft_length, head_length = 0.78 * length, 0.22 * length
+    shaft, head = turn.copy(), turn.copy()
+    shaft[:3, 3] = direction * shaft_length / 2
+    head[:3, 3] = direction * (shaft_length + head_length / 2)
+    return [
+        ("shaft", g.Cylinder(shaft_length, radius), shaft),
+        ("head", g.Cylinder(head_length, radiusTop=0.0, radiusBottom=2.2 * radius), head),
+    ]
 
 
 CAMERA_DIRECTION = np.array([1.0, -1.25, 0.85]) / np.linalg.norm([1.0, -1.25, 0.85])
@@ -90,29 +115,46 @@ class Viewer:
         host: address the server binds to (127.0.0.1: this machine only).
         zmq_url: connect to a running Meshcat server instead of starting one.
         open_browser: open the URL in the default browser.
+        offline: no server: the scene is kept in this process (:attr:`scene`, a
+            :class:`~.offline.SceneCommands`) for a page that builds it itself (the teleop
+            console) or for :meth:`save_html`; :attr:`url` is "".
     """
 
     def __init__(
-        self, robot: Robot, *, host: str = "127.0.0.1", zmq_url: str | None = None, open_browser: bool = False
+        self,
+        robot: Robot,
+        *,
+        host: str = "127.0.0.1",
+        zmq_url: str | None = None,
+        open_browser: bool = False,
+        offline: bool = False,
     ) -> None:
         self.robot = check_robot(robot)
         self.data = robot.model.createData()  # the viewer's own: a control loop keeps robot.data
         if zmq_url is not None:
+            if offline:
+                raise InputError("an offline viewer has no server: drop zmq_url or offline")
             check_reachable(zmq_url)
-        self.server = MeshcatServer(host) if zmq_url is None else None
+        self.server = MeshcatServer(host) if zmq_url is None and not offline else None
+        self.scene = SceneCommands() if offline else None
         with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints the URL itself; we report it
-            self.meshcat = meshcat.Visualizer(zmq_url=self.server.zmq_url if self.server else zmq_url)
-            self.url = self.server.web_url if self.server else self.meshcat.url()
+            if self.scene is not None:
+                self.meshcat = meshcat.Visualizer(window=self.scene)
+                self.url = ""
+            else:
+                self.meshcat = meshcat.Visualizer(zmq_url=self.server.zmq_url if self.server else zmq_url)
+                self.url = self.server.web_url if self.server else self.meshcat.url()
             self._visualizer = MeshcatVisualizer(robot.model, pin.GeometryModel(), robot.visual_model)
             self._visualizer.initViewer(viewer=self.meshcat)
             self._visualizer.loadViewerModel(rootNodeName=ROOT)
         self._geometry_data = robot.visual_model.createData()
         self._frames: list[dict[str, np.ndarray]] = []  # recorded transforms, for save_html
+        self._hand_axes = False
         self._paths = 0
         self.meshcat["markers/tcp"].set_object(*triad(0.08))
         self.meshcat["markers/sensor"].set_object(*triad(0.05, opacity=0.6))
         self.frame(robot.home())
-        if open_browser:
+        if open_browser and self.url:
             webbrowser.open(self.url, new=2)
 
     # ------------------------------------------------------------------ drawing
@@ -162,8 +204,24 @@ class Viewer:
             name = self._visualizer.getViewerNodeName(geometry, pin.GeometryType.VISUAL)
             transforms[name] = self._geometry_data.oMg[index].homogeneous @ scale
         transforms["markers/tcp"] = np.array(pin.updateFramePlacement(model, data, self.robot.tip_id).homogeneous)
-        transforms["markers/sensor"] = np.array(pin.updateFramePlacement(model, data, self.robot.sensor_id).homogeneous)
+        world_T_sensor = np.array(pin.updateFramePlacement(model, data, self.robot.sensor_id).homogeneous)
+        transforms["markers/sensor"] = world_T_sensor
+        if self._hand_axes:
+            transforms["markers/hand"] = world_T_sensor
         return transforms
+
+    def draw_hand_axes(self, length: float = 0.12) -> None:
+        """Arrows along the sensor frame's x, y, z (red, green, blue) under ``markers/hand``,
+        moved with the robot by :meth:`show` (Barker: "keeping track of the positive hand
+        axes"). ``length`` in metres."""
+        length = check_positive(length, "length")
+        for axis, colour in enumerate(AXIS_COLOURS):
+            material = g.MeshLambertMaterial(color=colour)
+            for part, geometry, transform in arrow_parts(axis, length, length / 30):
+                node = self.meshcat[f"markers/hand/{'xyz'[axis]}/{part}"]
+                node.set_object(geometry, material)
+                node.set_transform(transform)
+        self._hand_axes = True
 
     def tip_position(self, q: np.ndarray) -> np.ndarray:
         """The TCP position (3,) in the world at q (metres), on the viewer's own data."""
@@ -258,7 +316,8 @@ class Viewer:
         if self._frames:
             self.meshcat.set_animation(self.animation(fps), play=True, repetitions=10**9 if loop else 1)
         target = check_output_file(path, "replay file")
-        target.write_text(self.meshcat.static_html(), encoding="utf-8")
+        page = self.scene.static_html() if self.scene is not None else self.meshcat.static_html()
+        target.write_text(page, encoding="utf-8")
         return target
 
     def close(self) -> None:

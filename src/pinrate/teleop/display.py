@@ -1,0 +1,114 @@
+"""What the console shows, in words and numbers: the step's status as the operator reads it
+(Barker's complaints: which way are the hand's axes, how close are the joints to their
+limits, why did it slow down), each joint's value against its limits. Pure functions: the
+server turns them into JSON."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..control.controller import Step
+from ..control.status import Status
+from ..kinematics.manipulator import Robot
+
+GREY, GREEN, BLUE, AMBER, ORANGE, PURPLE, RED = (
+    "#7f7f7f",
+    "#2ca02c",
+    "#1f77b4",
+    "#d4a017",
+    "#ff7f0e",
+    "#9467bd",
+    "#d62728",
+)
+
+WORDS: dict[Status, tuple[str, str]] = {
+    Status.OK: ("moving", GREEN),
+    Status.TWIST_SATURATED: ("speed limited", BLUE),
+    Status.RATE_LIMITED: ("rate limited", AMBER),
+    Status.JOINT_LIMIT: ("at a joint limit", ORANGE),
+    Status.WRIST_SINGULARITY: ("wrist singularity", ORANGE),
+    Status.NEAR_SINGULARITY: ("near singularity", ORANGE),
+    Status.DECELERATE_FOR_SINGULARITY: ("near singularity: decelerating", ORANGE),
+    Status.DECELERATE_FOR_COLLISION: ("near self-collision: decelerating", ORANGE),
+    Status.AUXILIARY_ELBOW: ("auxiliary elbow active", PURPLE),
+    Status.FROZEN: ("frozen joints", RED),
+    Status.HALT_FOR_SINGULARITY: ("near singularity: halted", RED),
+    Status.HALT_FOR_COLLISION: ("near self-collision: halted", RED),
+}
+"""Each status as the console says it, and its colour."""
+
+
+@dataclass(frozen=True)
+class Said:
+    """A step's status as the console shows it."""
+
+    word: str
+    colour: str
+    detail: str
+    conditions: tuple[str, ...]
+
+
+def describe(step: Step | None, *, halted: bool = False, reversing: bool = False) -> Said:
+    """The words and colour for ``step``: "idle" when nothing moved and nothing limited it,
+    "halted" while the operator's halt holds, "reversing: …" during a reversal; the detail
+    names the joint, the block and the numbers (the step's own ``detail``), and the frozen
+    joints."""
+    if halted:
+        return Said("halted", RED, "the operator halted the robot: resume to drive it", ())
+    if step is None:
+        return Said("idle", GREY, "", ())
+    word, colour = WORDS[step.status]
+    if step.status is Status.OK and not step.joint_rates.any():
+        word, colour = "idle", GREY
+    detail = step.detail
+    if step.frozen and step.status is not Status.JOINT_LIMIT:
+        detail = f"{detail}; frozen: {', '.join(step.frozen)}" if detail else f"frozen: {', '.join(step.frozen)}"
+    if reversing:
+        word = f"reversing: {word}"
+    return Said(word, colour, detail, tuple(WORDS[condition][0] for condition in step.conditions))
+
+
+@dataclass(frozen=True)
+class JointGauge:
+    """One joint on the console: its value against its limits (None: unlimited)."""
+
+    name: str
+    unit: str
+    lower: float | None
+    upper: float | None
+
+
+def joint_gauges(robot: Robot) -> list[JointGauge]:
+    """Every moving joint, in velocity order: unit ("rad" or "m") and position limits."""
+    gauges = []
+    model = robot.model
+    for name in robot.joint_names:
+        joint = model.joints[robot.joint_id(name)]
+        kind = joint.shortname()  # JointModelPX, JointModelPrismaticUnaligned, ...
+        prismatic = kind.startswith("JointModelP") and not kind.startswith("JointModelPlanar")
+        limits = robot.joint_limits(name) if joint.nq == 1 else None
+        lower, upper = limits if limits is not None else (None, None)
+        gauges.append(JointGauge(name, "m" if prismatic else "rad", lower, upper))
+    return gauges
+
+
+def joint_values(robot: Robot, q: np.ndarray) -> list[float | None]:
+    """Each moving joint's value at q, in velocity order: q itself for 1-coordinate joints,
+    the angle atan2(sin, cos) for continuous joints, None for joints of more freedoms."""
+    values: list[float | None] = []
+    model = robot.model
+    for name in robot.joint_names:
+        joint = model.joints[robot.joint_id(name)]
+        if joint.nq == 1:
+            values.append(float(q[joint.idx_q]))
+        elif joint.nq == 2 and joint.nv == 1:
+            values.append(math.atan2(float(q[joint.idx_q + 1]), float(q[joint.idx_q])))
+        else:
+            values.append(None)
+    return values
+
+
+__all__ = ["WORDS", "JointGauge", "Said", "describe", "joint_gauges", "joint_values"]

@@ -1,0 +1,285 @@
+"""Barker's operator at the console: a twist from two 3-axis controllers, one controller step
+per tick, a dead man, and the way back (Barker 1983, "resolved-rate control by an operator";
+"recording and reversing a motion").
+
+    teleop = Teleop(robot)                        # q0: robot.home()
+    teleop.command([1, 0, 0], [0, 0, 0])          # full deflection along the hand's x axis
+    for _ in range(100):
+        step = teleop.tick()                      # one Controller.step of dt from teleop.q
+    teleop.reverse()                              # retrace the motion back to where it began
+
+Commands are stick deflections in [-1, 1], scaled by ``max_linear_speed`` (m/s) and
+``max_angular_speed`` (rad/s), in the robot's sensor frame's axes (Barker's hand frame when
+the sensor is the tip, the default) or, with ``frame="base"``, in the world frame's axes,
+turned into the sensor's at each tick. The same speeds bound the commanded twist (the
+controller's saturation), so the hand never moves faster than them.
+
+The record of the way back holds only motion: each tick that moves the robot advances a
+motion clock by dt, idle ticks do not, so :meth:`Teleop.reverse` retraces the last
+``history`` seconds of motion, not of waiting. :meth:`Teleop.mark` starts a new segment (the
+reversal then stops there). A run recorded for saving (:meth:`Teleop.start_recording`) keeps
+every tick with its wall time, rates and status (:class:`~.recording.Recording`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ..checks import check_positive
+from ..control.controller import Controller, Step
+from ..control.recorder import Playback, Recorder
+from ..errors import InputError
+from ..kinematics.manipulator import Robot, check_robot
+from .recording import Recording
+
+FRAMES = ("hand", "base")
+"""The values of ``Teleop(frame=...)``: the sensor frame's axes or the world's."""
+
+
+def _check_time(now: object) -> float:
+    if now is None:
+        return time.monotonic()
+    try:
+        stamp = float(now)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InputError(f"now must be a time in seconds, not {now!r}") from None
+    if not math.isfinite(stamp):
+        raise InputError(f"now must be finite, got {stamp}")
+    return stamp
+
+
+def _deflection(value: object, what: str) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{what} must be 3 numbers in [-1, 1], not {value!r}") from None
+    if array.shape != (3,):
+        raise InputError(f"{what} must have shape (3,), got shape {array.shape}")
+    if not np.isfinite(array).all():
+        raise InputError(f"{what} contains NaN or inf")
+    return np.clip(array, -1.0, 1.0)
+
+
+class Teleop:
+    """The operator's loop on a :class:`~pinrate.control.Controller` (contract v2).
+
+    Args:
+        robot: the robot driven; its sensor frame fixes the hand axes.
+        q0: the start configuration (nq,); None means ``robot.home()``.
+        max_linear_speed: m/s at full deflection; also the controller's TCP speed limit.
+        max_angular_speed: rad/s at full deflection; also the controller's limit.
+        timeout: s; a command older than this at a tick counts as zero (the dead man).
+        history: s of motion kept for :meth:`reverse`.
+        frame: ``"hand"`` (the sensor frame's axes, Barker) or ``"base"`` (the world's).
+        **controller_options: keyword options of :class:`Controller` (default algorithm
+            ``"exact"``).
+
+    Attributes:
+        q: the current configuration (nq,).
+        last: the last tick's :class:`Step` (None before the first).
+        halted: True after :meth:`halt` until :meth:`resume`: ticks command nothing.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        q0: object = None,
+        *,
+        max_linear_speed: float = 0.1,
+        max_angular_speed: float = 0.5,
+        timeout: float = 0.25,
+        history: float = 30.0,
+        frame: str = "hand",
+        **controller_options: object,
+    ) -> None:
+        self.robot = check_robot(robot)
+        self.max_linear_speed = check_positive(max_linear_speed, "max_linear_speed")
+        self.max_angular_speed = check_positive(max_angular_speed, "max_angular_speed")
+        self.timeout = check_positive(timeout, "timeout")
+        self.frame = frame
+        options = {"algorithm": "exact", **controller_options}
+        for name in ("max_linear_speed", "max_angular_speed"):
+            if name in options:
+                raise InputError(f"{name} is Teleop's own argument, not a controller option")
+        self._options = options
+        self.controller = self._controller(options)
+        self.q = robot.home() if q0 is None else robot.check_q(q0)
+        self.recorder = Recorder(history)
+        """The motion kept for :meth:`reverse` (times on the motion clock, s)."""
+        self.last: Step | None = None
+        self.halted = False
+        self._command = (np.zeros(3), np.zeros(3), -math.inf)  # one tuple: a reader never sees half of it
+        self._clock = 0.0
+        self._playback: Playback | None = None
+        self._reversed_at = -math.inf
+        self._recording: Recording | None = None
+
+    # ------------------------------------------------------------------ configuration
+    @property
+    def frame(self) -> str:
+        """The axes of the commands: ``"hand"`` (sensor frame) or ``"base"`` (world frame)."""
+        return self._frame
+
+    @frame.setter
+    def frame(self, value: str) -> None:
+        if value not in FRAMES:
+            raise InputError(f"frame must be one of {', '.join(FRAMES)}, not {value!r}")
+        self._frame = value
+
+    @property
+    def options(self) -> dict[str, object]:
+        """The controller's keyword options (a copy)."""
+        return dict(self._options)
+
+    def _controller(self, options: dict[str, object]) -> Controller:
+        return Controller(
+            self.robot, max_linear_speed=self.max_linear_speed, max_angular_speed=self.max_angular_speed, **options
+        )
+
+    def configure(self, **controller_options: object) -> None:
+        """A new controller with these options changed (``singularity="freeze"``, …); q, the
+        record and the command are kept. Bad options raise InputError and change nothing."""
+        options = {**self._options, **controller_options}
+        self.controller = self._controller(options)
+        self._options = options
+        self._playback = None
+
+    # ------------------------------------------------------------------ the operator
+    def command(self, linear: object, angular: object, now: object = None) -> None:
+        """Hold the stick deflections ``linear`` and ``angular`` (3 each, clipped to [-1, 1])
+        from ``now`` (s, default ``time.monotonic()``) until the next call; axes as
+        :attr:`frame` says. A non-zero command ends a reversal."""
+        linear_deflection = _deflection(linear, "linear")
+        angular_deflection = _deflection(angular, "angular")
+        stamp = _check_time(now)
+        self._command = (linear_deflection * self.max_linear_speed, angular_deflection * self.max_angular_speed, stamp)
+
+    def stop(self) -> None:
+        """Zero the command and end a reversal (the robot stops at the next tick)."""
+        self._command = (np.zeros(3), np.zeros(3), -math.inf)
+        self._end_playback()
+
+    def halt(self) -> None:
+        """:meth:`stop`, and ignore commands until :meth:`resume`."""
+        self.stop()
+        self.halted = True
+
+    def resume(self) -> None:
+        """Accept commands again after :meth:`halt`."""
+        self.halted = False
+
+    def reset(self, q: object = None) -> None:
+        """Back to ``q`` (default ``robot.home()``) at once: command, record and reversal
+        cleared, the controller's memory too (:meth:`Controller.reset`)."""
+        self.q = self.robot.home() if q is None else self.robot.check_q(q)
+        self.stop()
+        self.recorder.clear()
+        self.controller.reset()
+        self.last = None
+
+    def mark(self) -> None:
+        """Start a new segment here: a later :meth:`reverse` stops at this configuration."""
+        self.recorder.clear()
+
+    @property
+    def reversing(self) -> bool:
+        """True while a reversal retraces the record."""
+        return self._playback is not None
+
+    def reverse(self, now: object = None) -> bool:
+        """From the next tick on, retrace the recorded motion (the last ``history`` seconds
+        of it, or back to the last :meth:`mark`) backwards at the recorded pace, through the
+        controller's step (every limit applies), until its start or until a non-zero
+        command dated after ``now`` arrives. The held command is dropped. False (and
+        nothing changes) when there is no motion to retrace."""
+        stamp = _check_time(now)
+        if len(self.recorder) < 2:
+            return False
+        self._command = (np.zeros(3), np.zeros(3), -math.inf)
+        self._playback = self.recorder.playback(self.controller)
+        self._reversed_at = stamp
+        return True
+
+    def _end_playback(self) -> None:
+        """Forget what the playback retraced, so the record ends where the robot is."""
+        playback = self._playback
+        if playback is None:
+            return
+        self._playback = None
+        newest = float(self.recorder.times[-1])
+        self.recorder.truncate(newest - playback.elapsed)
+        self._clock = newest - playback.elapsed
+        if len(self.recorder):
+            self.recorder.record(self._clock, self.q)
+
+    # ------------------------------------------------------------------ the loop
+    def current_command(self, now: object = None) -> tuple[np.ndarray, np.ndarray]:
+        """(linear, angular) in m/s and rad/s, :attr:`frame` axes, that a tick at ``now``
+        would command: zero when older than ``timeout`` or while halted."""
+        linear, angular, stamp = self._command
+        if self.halted or _check_time(now) - stamp > self.timeout:
+            return np.zeros(3), np.zeros(3)
+        return linear, angular
+
+    def tick(self, now: object = None) -> Step:
+        """One controller step of dt from :attr:`q` with the current command (a reversal's
+        step while one runs); :attr:`q` becomes the step's. ``now``: s, default
+        ``time.monotonic()``; it ages the command (dead man), it does not set the step's dt."""
+        stamp = _check_time(now)
+        linear, angular = self.current_command(stamp)
+        commanded = bool(linear.any() or angular.any())
+        if self._playback is not None and commanded and self._command[2] > self._reversed_at:
+            self._end_playback()
+        if self._playback is not None:
+            step = self._playback.step(self.q)
+            self.q = step.q
+            if self._playback.done:
+                self._end_playback()
+        else:
+            step = self._operator_step(linear, angular)
+        self.last = step
+        if self._recording is not None:
+            self._recording.add(stamp, step)
+        return step
+
+    def _operator_step(self, linear: np.ndarray, angular: np.ndarray) -> Step:
+        controller = self.controller
+        observation = controller.observe_unchecked(self.q)
+        if self._frame == "base":
+            sensor_R_world = observation.world_T_sensor.rotation.T
+            linear, angular = sensor_R_world @ linear, sensor_R_world @ angular
+        twist = np.concatenate([linear, angular])[controller.index.rows]
+        step = controller.step(self.q, twist, observation=observation)
+        if step.joint_rates.any():
+            if not len(self.recorder):
+                self.recorder.record(self._clock, self.q)
+            self._clock += controller.dt
+            self.recorder.record(self._clock, step.q)
+        self.q = step.q
+        return step
+
+    # ------------------------------------------------------------------ a run for saving
+    @property
+    def recording(self) -> bool:
+        """True between :meth:`start_recording` and :meth:`stop_recording`."""
+        return self._recording is not None
+
+    def start_recording(self, max_samples: int = 2_000_000) -> None:
+        """Keep every tick from now on (at most ``max_samples``: the oldest go first); also
+        :meth:`mark` a new segment."""
+        self._recording = Recording(self.robot, self.controller.dt, max_samples=max_samples)
+        self._recording.add_start(self.q)
+        self.mark()
+
+    def stop_recording(self) -> Recording:
+        """The ticks since :meth:`start_recording` (InputError when not recording)."""
+        if self._recording is None:
+            raise InputError("not recording: call start_recording() first")
+        recording, self._recording = self._recording, None
+        return recording
+
+
+__all__ = ["FRAMES", "Teleop"]

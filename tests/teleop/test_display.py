@@ -1,0 +1,57 @@
+"""What the console says for each step (pinrate.teleop.display)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+import pinrate
+from pinrate import Controller, Status
+from pinrate.teleop.display import WORDS, describe, joint_gauges, joint_values
+
+
+def test_every_status_has_words_and_a_colour():
+    assert set(WORDS) == set(Status)
+    assert all(word and colour.startswith("#") for word, colour in WORDS.values())
+
+
+def test_idle_moving_halted_and_reversing(ur5):
+    controller = Controller(ur5)
+    still = controller.step(ur5.home(), np.zeros(6))
+    moving = controller.step(ur5.home(), np.array([0.05, 0, 0, 0, 0, 0]))
+    assert describe(still).word == "idle"
+    assert describe(moving).word == "moving"
+    assert describe(moving, reversing=True).word == "reversing: moving"
+    assert describe(moving, halted=True).word == "halted"
+    assert describe(None).word == "idle"
+
+
+def test_a_joint_limit_names_the_joint(ur5):
+    index = ur5.model.joints[ur5.joint_id("wrist_3_joint")].idx_q
+    q = ur5.home()
+    q[index] = ur5.model.upperPositionLimit[index]
+    step = Controller(ur5).step(q, np.array([0, 0, 0, 0, 0, 0.5]))
+    said = describe(step)
+    assert said.word == "at a joint limit"
+    assert "wrist_3_joint" in said.detail
+
+
+def test_gauges_and_values_follow_the_joints():
+    kinova = pinrate.load("kinova")  # continuous joints: two coordinates, one angle
+    gauges = joint_gauges(kinova)
+    assert [gauge.name for gauge in gauges] == list(kinova.joint_names)
+    q = kinova.home()
+    values = joint_values(kinova, q)
+    for name, gauge, value in zip(kinova.joint_names, gauges, values, strict=True):
+        joint = kinova.model.joints[kinova.joint_id(name)]
+        if joint.nq == 2:
+            assert gauge.lower is None
+            assert value == math.atan2(q[joint.idx_q + 1], q[joint.idx_q])
+        else:
+            assert (gauge.lower, gauge.upper) == kinova.joint_limits(name)
+            assert value == q[joint.idx_q]
+    scara = pinrate.load("scara")
+    units = {gauge.name: gauge.unit for gauge in joint_gauges(scara)}
+    prismatic = [name for name in scara.joint_names if scara.model.joints[scara.joint_id(name)].shortname()[10] == "P"]
+    assert prismatic and all(units[name] == "m" for name in prismatic)
