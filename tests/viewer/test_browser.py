@@ -1,18 +1,11 @@
-"""The Meshcat view in a real headless Chromium (Debian's /usr/bin/chromium, driven by Playwright).
-
-Skipped with a reason when Chromium or Playwright is missing, unless PINRATE_REQUIRE_BROWSER=1
-(CI sets it), which turns a missing browser into a failure.
-"""
+"""The Meshcat view in a real headless Chromium (tests/browser.py: skipped with a reason when
+Chromium is missing, a failure in CI)."""
 
 from __future__ import annotations
 
 import io
-import os
-import shutil
 import socket
-import tempfile
 import time
-from pathlib import Path
 from urllib.parse import urlparse
 
 import numpy as np
@@ -20,37 +13,10 @@ import pinocchio as pin
 import pytest
 
 import pinrate
+from browser import chromium, needs_browser
 from pinrate.kinematics.targets import nearby_target
 
-CHROMIUM = os.environ.get("PINRATE_CHROMIUM", "/usr/bin/chromium")
-REQUIRED = os.environ.get("PINRATE_REQUIRE_BROWSER") == "1"
-# Playwright adds --headless itself (headless=True) and the fresh --user-data-dir (persistent context).
-FLAGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--enable-unsafe-swiftshader",
-]
-
-
-def _browser_missing() -> str:
-    if not (Path(CHROMIUM).exists() or shutil.which(CHROMIUM)):
-        return f"Chromium not found at {CHROMIUM} (apt install chromium)"
-    try:
-        import playwright.sync_api  # noqa: F401
-    except ImportError:
-        return "playwright is not installed (pip install -e '.[test]')"
-    return ""
-
-
-MISSING = _browser_missing()
-if MISSING and REQUIRED:
-    raise RuntimeError(f"PINRATE_REQUIRE_BROWSER=1 but {MISSING}")
-pytestmark = pytest.mark.skipif(bool(MISSING), reason=MISSING or "browser available")
+pytestmark = needs_browser
 
 # JavaScript run in the page: walk viewer.scene_tree by .children only (find() creates nodes).
 WALK = """
@@ -90,14 +56,8 @@ RELATIVE_MATRIX = f"""
 
 @pytest.fixture(scope="module")
 def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as playwright, tempfile.TemporaryDirectory() as profile:
-        context = playwright.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, headless=True, args=FLAGS, viewport={"width": 800, "height": 600}
-        )
+    with chromium() as context:
         yield context
-        context.close()
 
 
 def served_robot(name: str):

@@ -1,4 +1,4 @@
-"""The ``pinrate`` command line: ``list``, ``demo``, ``analyze`` and ``paper``.
+"""The ``pinrate`` command line: ``list``, ``demo``, ``analyze``, ``paper`` and ``teleop``.
 
 ``main`` is the console script's entry point; this package imports nothing heavy until it
 runs (see :mod:`.entry`).

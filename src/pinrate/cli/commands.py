@@ -1,4 +1,5 @@
-"""The subcommands of ``pinrate``: ``list``, ``demo``, ``analyze`` and ``paper``, and their parser."""
+"""The subcommands of ``pinrate``: ``list``, ``demo``, ``analyze`` and ``paper``, and their parser
+(``teleop`` lives in :mod:`.teleop`)."""
 
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ from ..robots import EXAMPLE_ROBOTS, ROBOT_NAMES, example_robot_data_share, load
 from ..solvers.error_map import THEOREM_ALGORITHMS
 from ..solvers.registry import ALGORITHMS
 from ..theorem.pointwise import coupling_along
+from . import teleop
 from .arguments import Parser, count, finite, positive, warn
 
 DEMO_MAX_STEPS = 6000
@@ -366,6 +368,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.add_argument("--no-viewer", action="store_true", help="headless: print the summary only")
     demo.set_defaults(run=_demo)
+    teleop.add_parser(commands, _robot_arguments)
     return parser
 
 

@@ -13,7 +13,7 @@
   const state = {
     hello: null, controlling: false, free: false, moveKeys: new Set(), held: new Set(),
     seq: 0, keySeq: 0, keyTime: null, latencies: [], frames: 0, last: null, speed: 1,
-    halted: false, recording: false, events: [], connected: false,
+    halted: false, recording: false, events: [], connected: false, said: [],
   };
   window.pinrate = state;
 
@@ -192,6 +192,11 @@
         state.keyTime = null;
         requestAnimationFrame(() => state.latencies.push(performance.now() - pressed));
       }
+    }
+    const previous = state.said[state.said.length - 1];
+    if (!previous || previous.word !== frame.status || previous.detail !== frame.detail) {
+      state.said.push({ word: frame.status, detail: frame.detail, time: performance.now() });
+      if (state.said.length > 500) state.said.shift();
     }
     $("status").style.background = frame.colour;
     $("status-word").textContent = frame.status;
