@@ -50,6 +50,10 @@ def test_servo_reproduces_the_previous_release(name: str) -> None:
         expected = REFERENCE[f"{name}/{field}"]
         if name in LAPACK_RUNS:
             np.testing.assert_allclose(getattr(trajectory, field), expected, rtol=1e-12, atol=1e-12, err_msg=field)
+        elif field.endswith("_error"):
+            # The recorded error norms are numpy reductions, not fed back: numpy 2.4's norm
+            # rounds some of them one ulp away from the release's (q and rates stay bit-identical).
+            np.testing.assert_allclose(getattr(trajectory, field), expected, rtol=4.5e-16, atol=0, err_msg=field)
         else:
             np.testing.assert_array_equal(getattr(trajectory, field), expected, err_msg=f"{field} not bit-identical")
     # rho is recorded, not fed back: the unified eigenvalue routine may move its last digits.

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import os
 import shutil
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -342,10 +344,8 @@ def own_tcp_sockets() -> list[tuple[str, int, str]]:
             if fields[9] not in inodes:
                 continue
             address, port = fields[1].split(":")
-            if width == 8:
-                text = ".".join(str(int(address[i : i + 2], 16)) for i in (6, 4, 2, 0))
-            else:
-                text = "ipv6:" + address
+            ipv4 = ".".join(str(int(address[i : i + 2], 16)) for i in (6, 4, 2, 0)) if width == 8 else ""
+            text = ipv4 or "ipv6:" + address
             found.append((text, int(port, 16), "listen" if fields[3] == "0A" else "connected"))
     return found
 
@@ -376,3 +376,16 @@ def test_drawn_links_follow_the_robot(browser, console):
     expected = geometry_data.oMg[2].homogeneous @ np.diag([*geometry.meshScale, 1.0])
     np.testing.assert_allclose(drawn, expected, atol=1e-5)  # float32 on the page
     page.close()
+
+
+def test_benchmark_smoke():
+    # Timings are not checked here (benchmarks/teleop.py measures them); the script must keep running.
+    result = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "teleop.py"), "--seconds", "1", "--presses", "2", "--rate", "500"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "teleop console, page attached" in result.stdout and "key to painted frame" in result.stdout

@@ -8,6 +8,7 @@ import contextlib
 import warnings
 import webbrowser
 
+from ..checks import check_output_folder
 from ..control.singularity import STRATEGIES, WRIST_STRATEGIES
 from ..errors import InputError
 from ..solvers.registry import ALGORITHMS
@@ -53,12 +54,17 @@ def add_parser(commands: argparse._SubParsersAction, robot_arguments) -> None:  
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..teleop.server import TeleopServer, check_host  # meshcat and tornado only for a console
     from .commands import _load, _start  # the shared robot loading and --q0 of the demo
 
     if args.rate > MAX_RATE:
         raise InputError(f"--rate must be at most {MAX_RATE:g} Hz, got {args.rate:g}")
     if args.port > 65535:
         raise InputError(f"--port must be at most 65535, got {args.port}")
+    check_output_folder(args.record_dir, "record folder")  # refused before the robot loads
+    with warnings.catch_warnings():  # the server warns about a shared address, once
+        warnings.simplefilter("ignore", UserWarning)
+        check_host(args.host)
     robot = _load(args)
     q0 = None if args.q0 is None else _start(robot, args.q0)
     teleop = Teleop(
@@ -74,8 +80,6 @@ def run(args: argparse.Namespace) -> int:
         dt=1.0 / args.rate,
         collision=args.collision,
     )
-    from ..teleop.server import TeleopServer  # meshcat and tornado only when a console is asked for
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
         server = TeleopServer(teleop, host=args.host, port=args.port, record_dir=args.record_dir)

@@ -21,6 +21,10 @@
   link's pose from the viewer's own ``pin.Data``; a page still busy with the last frame
   skips this one.
 
+While a console runs, the interpreter's thread switch interval is 0.2 ms
+(:data:`SWITCH_INTERVAL`), so the other threads cannot hold the control loop off for
+CPython's default 5 ms.
+
 Threads are daemons and nothing else is started: a killed process leaves no child and no
 port behind.
 """
@@ -34,6 +38,7 @@ import json
 import math
 import queue
 import socket
+import sys
 import threading
 import time
 from collections import deque
@@ -72,6 +77,11 @@ STATS_WINDOW = 2.0
 
 REPLAY_FPS = 30.0
 """Frames per second of a recording's HTML replay."""
+
+SWITCH_INTERVAL = 2e-4
+"""Seconds a thread holding the GIL runs before a waiting one may take it, while a console
+runs (CPython's default, 5 ms, lets the render or web thread delay a 1 kHz tick by up to
+5 ms; restored on close)."""
 
 
 class LoopStats:
@@ -247,6 +257,8 @@ class TeleopServer:
             threading.Thread(target=self._control, name="pinrate-teleop-control", daemon=True),
             threading.Thread(target=self._render, name="pinrate-teleop-render", daemon=True),
         ]
+        self._switch_interval = sys.getswitchinterval()
+        sys.setswitchinterval(min(self._switch_interval, SWITCH_INTERVAL))
         self._running.set()
         for thread in self._threads:
             thread.start()
@@ -289,6 +301,7 @@ class TeleopServer:
         for sock in self._sockets:
             with contextlib.suppress(OSError):
                 sock.close()
+        sys.setswitchinterval(self._switch_interval)
 
     # ------------------------------------------------------------------ what callers read
     def snapshot(self) -> tuple[np.ndarray, Any]:
@@ -643,4 +656,4 @@ class TeleopServer:
                 client.pending = client.write_message(text)
 
 
-__all__ = ["TeleopServer"]
+__all__ = ["LoopStats", "TeleopServer", "check_host"]

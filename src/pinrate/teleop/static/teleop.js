@@ -217,7 +217,9 @@
     if ($("wrist").value !== frame.wrist) $("wrist").value = frame.wrist;
     if (frame.twist && state.hello) {
       const names = state.hello.controls;
-      $("command").textContent = names.map((name, i) => `${name} ${format(frame.twist[i]).padStart(7)}`).join("  ");
+      const parts = names.map((name, i) => `${name} ${format(frame.twist[i]).padStart(7)}`);
+      const linear = names.filter((name) => name.startsWith("v")).length;  // m/s, then rad/s
+      $("command").textContent = `${parts.slice(0, linear).join("  ")}\n${parts.slice(linear).join("  ")}`;
     }
     if (state.hello) {
       const frozen = new Set(frame.frozen);

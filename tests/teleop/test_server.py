@@ -1,0 +1,198 @@
+"""The console's server without a browser: Host and Origin checks, the silent-page watchdog,
+and the ``pinrate teleop`` process (Ctrl-C, SIGTERM, SIGKILL leave no process or port)."""
+
+from __future__ import annotations
+
+import asyncio
+import http.client
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import tornado.httpclient
+import tornado.websocket
+
+import pinrate
+from pinrate.teleop.server import TeleopServer
+
+COMMAND = [sys.executable, "-m", "pinrate.cli"]
+
+
+@pytest.fixture
+def server(ur5, tmp_path):
+    teleop = pinrate.Teleop(ur5, dt=0.002, timeout=0.3)
+    with TeleopServer(teleop, record_dir=tmp_path) as running:
+        yield running
+
+
+def get(server, path: str, host: str) -> int:
+    connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+    connection.putrequest("GET", path, skip_host=True)
+    connection.putheader("Host", host)
+    connection.endheaders()
+    status = connection.getresponse().status
+    connection.close()
+    return status
+
+
+def test_the_page_and_meshcat_are_served_to_their_own_host_only(server):
+    own = f"127.0.0.1:{server.port}"
+    assert get(server, "/", own) == 200
+    assert get(server, "/", f"localhost:{server.port}") == 200
+    assert get(server, "/meshcat/main.min.js", own) == 200
+    assert get(server, "/static/teleop.js", own) == 200
+    assert get(server, "/", f"attacker.example:{server.port}") == 403  # DNS rebinding
+    assert get(server, "/", "127.0.0.1:1") == 403
+    assert get(server, "/static/../server.py", own) in (403, 404)
+
+
+async def _connect(server, origin: str | None):
+    headers = {"Origin": origin} if origin else {}
+    request = tornado.httpclient.HTTPRequest(f"ws://127.0.0.1:{server.port}/ws", headers=headers)
+    return await tornado.websocket.websocket_connect(request)
+
+
+@pytest.mark.parametrize("origin", ["http://attacker.example", "https://127.0.0.1:1", "null"])
+def test_a_socket_from_another_origin_is_refused(server, origin):
+    async def attempt():
+        with pytest.raises(tornado.httpclient.HTTPClientError) as refused:
+            await _connect(server, origin)
+        return refused.value.code
+
+    assert asyncio.run(attempt()) == 403
+
+
+def test_a_silent_controlling_page_stops_a_reversal(server):
+    """A page that asked for a reversal and then froze (no heartbeat) stops the robot."""
+
+    async def session():
+        client = await _connect(server, f"http://127.0.0.1:{server.port}")
+        hello = None
+        while hello is None or hello.get("type") != "role":
+            message = await client.read_message()
+            if isinstance(message, str):
+                hello = json.loads(message)
+        assert hello["controlling"]
+        for seq in range(1, 21):  # W held for 0.4 s, heartbeat every 20 ms
+            await client.write_message(json.dumps({"type": "input", "seq": seq, "keys": ["KeyW"], "speed": 1}))
+            await asyncio.sleep(0.02)
+        await client.write_message(json.dumps({"type": "input", "seq": 21, "keys": [], "speed": 1}))
+        await asyncio.sleep(0.1)
+        await client.write_message(json.dumps({"type": "reverse"}))
+        started = time.monotonic()
+        while not server.teleop.reversing and time.monotonic() - started < 5:
+            await asyncio.sleep(0.01)
+        assert server.teleop.reversing
+        # silent from now on, connection open
+        while server.teleop.reversing and time.monotonic() - started < 5:
+            await asyncio.sleep(0.01)
+        stopped = time.monotonic() - started
+        client.close()
+        return stopped
+
+    stopped = asyncio.run(session())
+    assert server.teleop.timeout <= stopped < server.teleop.timeout + 0.3
+    assert server.teleop.recorder.times.size > 1  # stopped part-way: motion left to reverse
+
+
+def start_cli(*arguments: str) -> tuple[subprocess.Popen[str], int]:
+    process = subprocess.Popen(
+        [*COMMAND, "teleop", "ur5", *arguments], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    deadline = time.monotonic() + 60
+    assert process.stdout is not None
+    while time.monotonic() < deadline:
+        line = process.stdout.readline()
+        if line.startswith("console"):
+            url = line.split()[1]
+            return process, int(url.rsplit(":", 1)[1].strip("/"))
+        assert line or process.poll() is None, process.communicate()
+    raise AssertionError("the console never printed its URL")
+
+
+def port_is_free(port: int) -> bool:
+    with socket.socket() as probe:
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+    return True
+
+
+def children(pid: int) -> list[int]:
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat", encoding="ascii") as stat:
+                    if int(stat.read().rsplit(")", 1)[1].split()[1]) == pid:
+                        found.append(int(entry))
+            except (OSError, ValueError):
+                continue
+    return found
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="needs Linux /proc")
+def test_sigkill_leaves_no_process_and_no_port():
+    process, port = start_cli()
+    assert not port_is_free(port)
+    assert children(process.pid) == []  # threads only: nothing to orphan
+    process.kill()
+    process.wait(timeout=10)
+    deadline = time.monotonic() + 5
+    while not port_is_free(port) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert port_is_free(port)
+    process.communicate()
+
+
+@pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 0), (signal.SIGTERM, 143)])
+def test_ctrl_c_quits_and_sigterm_terminates_freeing_the_port(signum, code):
+    process, port = start_cli("--rate", "250")
+    process.send_signal(signum)
+    _, err = process.communicate(timeout=20)
+    assert process.returncode == code
+    assert "Traceback" not in err
+    assert port_is_free(port)
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        (["--rate", "0"], "--rate"),
+        (["--rate", "100000"], "--rate must be at most"),
+        (["--timeout", "-1"], "--timeout"),
+        (["--singularity", "pray"], "--singularity"),
+        (["--host", "192.0.2.1"], "not an address of this machine"),
+        (["--port", "70000"], "--port"),
+        (["--q0", "1", "2"], "--q0 takes 6 values"),
+    ],
+)
+def test_bad_options_are_one_line_and_exit_2(arguments, message):
+    result = subprocess.run(
+        [*COMMAND, "teleop", "ur5", *arguments], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 2, result.stderr
+    assert message in result.stderr
+    assert result.stderr.startswith("pinrate: error:") and "Traceback" not in result.stderr
+
+
+def test_a_file_as_record_folder_is_refused(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    result = subprocess.run(
+        [*COMMAND, "teleop", "ur5", "--record-dir", str(blocker)], capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 2
+    assert "record folder" in result.stderr
+
+
+def test_snapshot_and_poses_are_safe_beside_the_loop(server, ur5):
+    q, _ = server.snapshot()
+    np.testing.assert_allclose(server.tip_pose(q), ur5.pose(q), atol=1e-12)
