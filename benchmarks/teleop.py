@@ -21,7 +21,6 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -31,17 +30,8 @@ import numpy as np
 import pinrate
 from pinrate.teleop.server import TeleopServer
 
-CHROMIUM = "/usr/bin/chromium"
-FLAGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--enable-unsafe-swiftshader",
-]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from browser import CHROMIUM, chromium  # the browser tests' Chromium, flags and all
 
 
 def bare_loop(rate: float, seconds: float) -> np.ndarray:
@@ -67,8 +57,6 @@ def summary(periods: np.ndarray) -> tuple[float, float, float]:
 
 
 def measure(rate: float, seconds: float, presses: int, width: int, height: int) -> dict[str, object]:
-    from playwright.sync_api import sync_playwright
-
     baseline = []
     holder = threading.Thread(target=lambda: baseline.append(bare_loop(rate, min(seconds, 5.0))))
     holder.start()
@@ -76,10 +64,7 @@ def measure(rate: float, seconds: float, presses: int, width: int, height: int) 
 
     robot = pinrate.load("ur5")
     teleop = pinrate.Teleop(robot, dt=1.0 / rate, timeout=1.0)
-    with TeleopServer(teleop) as server, sync_playwright() as playwright, tempfile.TemporaryDirectory() as profile:
-        context = playwright.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, headless=True, args=FLAGS, viewport={"width": width, "height": height}
-        )
+    with TeleopServer(teleop) as server, chromium(width, height) as context:
         page = context.new_page()
         page.goto(server.url)
         page.wait_for_function("() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0")
@@ -100,7 +85,6 @@ def measure(rate: float, seconds: float, presses: int, width: int, height: int) 
                 page.wait_for_timeout(100)
         periods = server.stats.recent(float("inf"))
         latencies = page.evaluate("() => window.pinrate.latencies")
-        context.close()
     return {"baseline": baseline[0], "periods": periods, "latencies": np.array(latencies)}
 
 
