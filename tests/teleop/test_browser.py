@@ -160,9 +160,13 @@ def test_a_held_key_moves_the_hand_along_its_axis(browser, console, tmp_path):
     held = {}
 
     def drive():
-        held["s"] = hold(page, "KeyW", 1.0)
-        page.wait_for_timeout(150)
-        shoot(page, tmp_path, "teleop-moving")
+        page.keyboard.down("KeyW")
+        started = time.monotonic()
+        time.sleep(0.7)
+        shoot(page, tmp_path, "teleop-moving")  # while the hand moves
+        time.sleep(max(0.0, 1.0 - (time.monotonic() - started)))
+        page.keyboard.up("KeyW")
+        held["s"] = time.monotonic() - started
 
     recording = recorded(server, page, drive)
     check_travel(server, recording, 0, hand, 0.1, held["s"])
