@@ -311,17 +311,17 @@ class TeleopServer:
     def tip_pose(self, q: np.ndarray | None = None) -> np.ndarray:
         """The tip's 4x4 pose in the world at q (default: the current one), computed on a
         ``pin.Data`` of its own, so it is safe beside the running loop."""
-        q = self.teleop.q.copy() if q is None else np.asarray(q, dtype=float)
-        with self._pose_lock:
-            pin.framesForwardKinematics(self.robot.model, self._pose_data, q)
-            return np.array(self._pose_data.oMf[self.robot.tip_id].homogeneous)
+        return self._frame_pose(self.robot.tip_id, q)
 
     def sensor_pose(self, q: np.ndarray | None = None) -> np.ndarray:
         """The sensor's 4x4 pose in the world at q (its axes are the hand axes)."""
+        return self._frame_pose(self.robot.sensor_id, q)
+
+    def _frame_pose(self, frame_id: int, q: np.ndarray | None) -> np.ndarray:
         q = self.teleop.q.copy() if q is None else np.asarray(q, dtype=float)
         with self._pose_lock:
             pin.framesForwardKinematics(self.robot.model, self._pose_data, q)
-            return np.array(self._pose_data.oMf[self.robot.sensor_id].homogeneous)
+            return np.array(self._pose_data.oMf[frame_id].homogeneous)
 
     @property
     def clients(self) -> int:

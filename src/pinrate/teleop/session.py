@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from ..checks import check_positive
+from ..checks import check_positive, check_vector
 from ..control.controller import Controller, Step
 from ..control.recorder import Playback, Recorder
 from ..errors import InputError
@@ -52,15 +52,8 @@ def _check_time(now: object) -> float:
 
 
 def _deflection(value: object, what: str) -> np.ndarray:
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{what} must be 3 numbers in [-1, 1], not {value!r}") from None
-    if array.shape != (3,):
-        raise InputError(f"{what} must have shape (3,), got shape {array.shape}")
-    if not np.isfinite(array).all():
-        raise InputError(f"{what} contains NaN or inf")
-    return np.clip(array, -1.0, 1.0)
+    """Three stick deflections, clipped to [-1, 1]; InputError for a wrong shape or NaN."""
+    return np.clip(check_vector(value, 3, what), -1.0, 1.0)
 
 
 class Teleop:
