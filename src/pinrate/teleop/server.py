@@ -145,13 +145,20 @@ def _allowed_hosts(host: str, port: int) -> Callable[[str], bool]:
     return allowed
 
 
-class _Page(tornado.web.RequestHandler):
-    def initialize(self, server: TeleopServer) -> None:
-        self.server = server
+class _HostChecked:
+    """Every HTTP request must name this server in its Host header (DNS rebinding)."""
+
+    server: TeleopServer
+    request: Any
 
     def prepare(self) -> None:
         if not self.server.host_allowed(self.request.host):
             raise tornado.web.HTTPError(403, reason="Host not allowed")
+
+
+class _Page(_HostChecked, tornado.web.RequestHandler):
+    def initialize(self, server: TeleopServer) -> None:
+        self.server = server
 
     def get(self) -> None:
         self.set_header("Content-Type", "text/html; charset=utf-8")
@@ -159,14 +166,10 @@ class _Page(tornado.web.RequestHandler):
         self.write((STATIC / "index.html").read_bytes())
 
 
-class _Static(tornado.web.StaticFileHandler):
+class _Static(_HostChecked, tornado.web.StaticFileHandler):
     def initialize(self, path: str, server: TeleopServer, default_filename: str | None = None) -> None:  # type: ignore[override]
         super().initialize(path, default_filename)
         self.server = server
-
-    def prepare(self) -> None:
-        if not self.server.host_allowed(self.request.host):
-            raise tornado.web.HTTPError(403, reason="Host not allowed")
 
 
 class _Socket(tornado.websocket.WebSocketHandler):
@@ -393,7 +396,7 @@ class TeleopServer:
             "wrists": list(WRIST_STRATEGIES),
             "frames": list(FRAMES),
             "frame": teleop.frame,
-            "controls": list(np.array(["vx", "vy", "vz", "wx", "wy", "wz"])[teleop.controller.index.rows]),
+            "controls": [("vx", "vy", "vz", "wx", "wy", "wz")[row] for row in teleop.controller.index.rows],
         }
 
     def _role(self, client: _Socket) -> dict[str, Any]:
