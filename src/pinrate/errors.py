@@ -54,6 +54,11 @@ class SchedulerError(PinrateError):
     """A Dask scheduler could not be reached."""
 
 
+class UnsupportedByCoreError(PinrateError):
+    """The compiled core does not cover a robot or configuration; the message says why. The
+    loops catch it and run on the Python path, which covers everything."""
+
+
 def choices_hint(name: str, valid: Iterable[str], *, limit: int = 40) -> str:
     """A ' Did you mean …? Known: …' suffix listing the closest or all valid names."""
     valid = list(valid)

@@ -36,7 +36,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..checks import check_positive, check_vector
-from ..errors import InputError, SingularBlockError
+from ..compiled import CoreServo, ServoSettings, backend, core_kinematics
+from ..errors import InputError, SingularBlockError, UnsupportedByCoreError
 from ..kinematics.axes import wrist_axes, wrist_centre
 from ..kinematics.home import generic_ranks
 from ..kinematics.manipulator import Robot
@@ -52,7 +53,7 @@ from ..solvers.conditioning import (
 )
 from ..solvers.generalized import damped_inverter, filtered_rates, generalized_inverter
 from ..solvers.rates import partition_rates, partition_spectral_radius
-from ..solvers.reference import Inverter
+from ..solvers.reference import DLS_DAMPING, EXACT_RCOND, Inverter
 from ..solvers.registry import check_algorithm
 from .collision import CollisionMonitor
 from .commands import JointJog, PoseGoal, Uncoupled, joint_rate_vector
@@ -343,6 +344,68 @@ class Controller:
                 self._bend_sign = self._first_bend_sign
                 if elbow_region is None:
                     self.elbow_region = self._slow_bend(self.elbow)
+
+    def compiled(self) -> CoreServo | None:
+        """The compiled twin of this controller (:mod:`pinrate.compiled`) with its settings as
+        they are now; None where the Python path is chosen or the configuration is one the
+        core does not cover (:meth:`compiled_reason` says which)."""
+        if self.compiled_reason() is not None:
+            return None
+        try:
+            return CoreServo(self.robot, self._compiled_settings())
+        except UnsupportedByCoreError:
+            return None
+
+    def compiled_reason(self) -> str | None:
+        """Why this controller's loops run on Python though the core may be there (None when
+        nothing in the configuration stops the core)."""
+        if self.elbow is not None:
+            return "auxiliary elbow control runs on the Python path"
+        if self._posture is not None:
+            return "a posture task runs on the Python path"
+        if self.acceleration_limits is not None:
+            return "acceleration limits run on the Python path"
+        if self.collision is not None:
+            return "the collision monitor runs on the Python path"
+        if not self.index.small:
+            return "the compiled core takes square A and W of size 1 to 3 (rho of other blocks is the error map's)"
+        if "J" in self._measured and not self._square_j:
+            return f"{self.algorithm} measures J, which is not square here"
+        try:
+            if core_kinematics(self.robot) is None:
+                return backend().reason
+        except UnsupportedByCoreError as unsupported:
+            return str(unsupported)
+        return None
+
+    def _compiled_settings(self) -> ServoSettings:
+        index = self.index
+        return ServoSettings(
+            rows=tuple(index.rows.tolist()),
+            columns=tuple(index.columns.tolist()),
+            m=index.m,
+            n_arm=int(index.arm_columns.size),
+            algorithm=self.algorithm,
+            measured=self._measured,
+            row_scale=tuple(self._row_scale.tolist()),
+            slow_threshold=self.slow_threshold,
+            watch=self.singularity in ("decelerate", "auxiliary_elbow"),
+            watch_factor=WATCH_FACTOR,
+            watched_step=WATCHED_STEP,
+            max_linear_speed=self.max_linear_speed,
+            max_angular_speed=self.max_angular_speed,
+            dt=self.dt,
+            position_limits=self.position_limits,
+            limits=np.array([(limit.index, limit.velocity, limit.lower, limit.upper) for limit in self._limits]),
+            rate_limits=np.array(self._rate_limit_rows),
+            exact_rcond=EXACT_RCOND,
+            dls_damping=DLS_DAMPING,
+        )
+
+    def position_limit(self, number: int) -> _Limit:
+        """The ``number``-th position limit the controller keeps (the compiled core names a
+        clamped joint by it)."""
+        return self._limits[number]
 
     def _posture_joints(self, posture: object) -> PostureJoints | None:
         """The secondary task's joints and preferred posture, or None when it is off."""

@@ -43,16 +43,18 @@ go on serving the error (a target the held joint was needed for then ends as "st
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from ..checks import check_count, check_positive
+from ..compiled import CoreServo
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from .commands import PoseGoal
 from .controller import MAX_ANGULAR_SPEED, MAX_LINEAR_SPEED, Controller, Observation, error_norms
-from .status import Status
+from .status import Status, most_severe
 from .trajectory import Trajectory
 
 DIVERGENCE_FACTOR = 3.0
@@ -135,71 +137,238 @@ def servo(
     if stall_time is None:
         stall_time = max(1.0, STALL_TIME_CONSTANTS / goal.gain)
     stall_steps = min(math.ceil(check_positive(stall_time, "stall_time") / controller.dt), STALL_MAX_STEPS)
-    m = controller.index.m
+    run = _Run(controller, goal, q, tol, stall_steps, max_steps)
+    core = controller.compiled()
+    if core is None:
+        run.python()
+    else:
+        run.compiled(core)
+    return run.trajectory()
 
-    configurations, rates_log, status, details = [q], [], [], []
-    position_errors, orientation_errors, radii = [], [], []
 
-    def record(q: np.ndarray) -> Observation:
-        observation = controller.observe_unchecked(q, goal)
-        position, orientation = error_norms(observation, m)
-        position_errors.append(position)
-        orientation_errors.append(orientation)
-        radii.append(observation.spectral_radius)
+class _Log:
+    """One run's per-step arrays, rows indexed by step number, grown by doubling."""
+
+    def __init__(self, q0: np.ndarray, nv: int, capacity: int) -> None:
+        self.capacity = capacity
+        self.q = np.empty((capacity + 1, q0.size))
+        self.q[0] = q0
+        self.rates = np.empty((capacity, nv))
+        self.position = np.empty(capacity + 1)
+        self.orientation = np.empty(capacity + 1)
+        self.radius = np.empty(capacity + 1)
+        self.flags = np.zeros(capacity, dtype=np.int32)  # the core's step flags (0: a Python step)
+        self.scale = np.ones(capacity)
+        self.hit = np.full(capacity, -1, dtype=np.int32)
+
+    def grow(self) -> None:
+        capacity = 2 * self.capacity
+        for name in ("q", "rates", "position", "orientation", "radius"):
+            old = getattr(self, name)
+            new = np.empty((old.shape[0] - self.capacity + capacity, *old.shape[1:]))
+            new[: old.shape[0]] = old
+            setattr(self, name, new)
+        for name, fill in (("flags", 0), ("scale", 1.0), ("hit", -1)):
+            old = getattr(self, name)
+            new = np.full(capacity, fill, dtype=old.dtype)
+            new[: old.shape[0]] = old
+            setattr(self, name, new)
+        self.capacity = capacity
+
+    def arguments(self) -> tuple[np.ndarray, ...]:
+        return (self.q, self.rates, self.position, self.orientation, self.radius, self.flags, self.scale, self.hit)
+
+
+INITIAL_CAPACITY = 2048
+"""Steps a run's arrays hold before they first grow."""
+
+
+class _Run:
+    """One servo run: the stop rules of the module docstring over :meth:`Controller.step`,
+    on Python (:meth:`python`) or in the compiled core with Python taking the steps it hands
+    back (:meth:`compiled`); both fill one log the same way."""
+
+    def __init__(
+        self, controller: Controller, goal: PoseGoal, q0: np.ndarray, tol: float, stall_steps: int, max_steps: int
+    ) -> None:
+        self.controller, self.goal, self.tol = controller, goal, tol
+        self.stall_steps, self.max_steps = stall_steps, max_steps
+        self.m = controller.index.m
+        self.log = _Log(q0, controller.robot.nv, max(1, min(max_steps, INITIAL_CAPACITY)))
+        self.steps: dict[int, tuple[str, str]] = {}  # step number -> (word, detail) of a Python step
+        self.step_number = 0
+        self.best = math.inf
+        self.progress, self.progress_step = math.inf, 0  # the error at the last 1 % improvement, and when
+        self.final, self.reason = "", ""
+
+    # ------------------------------------------------------------------ the two paths
+    def python(self) -> None:
+        while True:
+            observation = self._record()
+            if self._judge():
+                return
+            if self._python_step(observation):
+                return
+
+    def compiled(self, core: CoreServo) -> None:
+        outcomes = core.core
+        target = np.ascontiguousarray(self.goal.target.homogeneous)
+        while True:
+            outcome, self.step_number, self.best, self.progress, self.progress_step = core.run(
+                self.log.q[self.step_number],
+                target,
+                self.goal.gain,
+                self.tol,
+                self.stall_steps,
+                self.max_steps,
+                DIVERGENCE_FACTOR,
+                STALL_IMPROVEMENT,
+                self.step_number,
+                self.best,
+                self.progress,
+                self.progress_step,
+                *self.log.arguments(),
+            )
+            if outcome not in (outcomes.HANDBACK, outcomes.FULL):
+                self._conclude(outcome, outcomes)
+                return
+            # The core recorded this step's observation and judged it; Python takes the step.
+            q = self.log.q[self.step_number]
+            if self._python_step(self.controller.observe_unchecked(q, self.goal)):
+                return
+
+    # ------------------------------------------------------------------ one step's parts
+    def _record(self) -> Observation:
+        observation = self.controller.observe_unchecked(self.log.q[self.step_number], self.goal)
+        position, orientation = error_norms(observation, self.m)
+        self.log.position[self.step_number] = position
+        self.log.orientation[self.step_number] = orientation
+        self.log.radius[self.step_number] = observation.spectral_radius
         return observation
 
-    best = math.inf
-    progress, progress_step = math.inf, 0  # the error at the last 1 % improvement, and when
-    reason, final = "", ""
-    for step_number in range(max_steps + 1):
-        observation = record(q)
-        total = position_errors[-1] + orientation_errors[-1]
-        if position_errors[-1] < tol and orientation_errors[-1] < tol:
-            final, reason = "converged", f"converged in {step_number} steps"
-            break
-        best = min(best, total)
-        if total > DIVERGENCE_FACTOR * best + tol:
-            final = "diverging"
-            growth = f"error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best {best:.4g}"
-            reason = f"diverging: {growth} at step {step_number}"
-            break
-        if total < (1.0 - STALL_IMPROVEMENT) * progress:
-            progress, progress_step = total, step_number
-        elif step_number - progress_step >= stall_steps:
-            final = "stalled"
-            reason = (
-                f"stalled: error {total:.4g} (m + rad) has not improved by {STALL_IMPROVEMENT:.0%} on "
-                f"{progress:.4g} (step {progress_step}) for {stall_steps * controller.dt:g} s, at step {step_number}"
-            )
-            break
-        if step_number == max_steps:
-            final, reason = "max steps", f"max_steps ({max_steps}) reached"
-            break
-        step = controller.step(q, goal, observation=observation)
+    def _judge(self) -> bool:
+        """The stop rules at this step's recorded errors; True when the run ends here."""
+        step_number = self.step_number
+        position, orientation = self.log.position[step_number], self.log.orientation[step_number]
+        total = float(position + orientation)
+        if position < self.tol and orientation < self.tol:
+            self.final, self.reason = "converged", f"converged in {step_number} steps"
+            return True
+        self.best = min(self.best, total)
+        if total > DIVERGENCE_FACTOR * self.best + self.tol:
+            self._diverging(total)
+            return True
+        if total < (1.0 - STALL_IMPROVEMENT) * self.progress:
+            self.progress, self.progress_step = total, step_number
+        elif step_number - self.progress_step >= self.stall_steps:
+            self._stalled(total)
+            return True
+        if step_number == self.max_steps:
+            self.final, self.reason = "max steps", f"max_steps ({self.max_steps}) reached"
+            return True
+        return False
+
+    def _diverging(self, total: float) -> None:
+        growth = f"error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best {self.best:.4g}"
+        self.final, self.reason = "diverging", f"diverging: {growth} at step {self.step_number}"
+
+    def _stalled(self, total: float) -> None:
+        self.final = "stalled"
+        self.reason = (
+            f"stalled: error {total:.4g} (m + rad) has not improved by {STALL_IMPROVEMENT:.0%} on "
+            f"{self.progress:.4g} (step {self.progress_step}) for {self.stall_steps * self.controller.dt:g} s, "
+            f"at step {self.step_number}"
+        )
+
+    def _conclude(self, outcome: int, outcomes: Any) -> None:
+        """The final word and reason of a run the core ended."""
+        total = float(self.log.position[self.step_number] + self.log.orientation[self.step_number])
+        if outcome == outcomes.CONVERGED:
+            self.final, self.reason = "converged", f"converged in {self.step_number} steps"
+        elif outcome == outcomes.DIVERGING:
+            self._diverging(total)
+        elif outcome == outcomes.STALLED:
+            self._stalled(total)
+        else:
+            self.final, self.reason = "max steps", f"max_steps ({self.max_steps}) reached"
+
+    def _python_step(self, observation: Observation) -> bool:
+        """Controller.step from this step's observation; True when it halts the run."""
+        step_number = self.step_number
+        if step_number >= self.log.capacity:
+            self.log.grow()
+        step = self.controller.step(observation.q, self.goal, observation=observation)
         if step.status is Status.HALT_FOR_SINGULARITY:
-            final, reason = "singular", f"singular: {step.detail} at step {step_number}"
-            break
+            self.final, self.reason = "singular", f"singular: {step.detail} at step {step_number}"
+            return True
         if step.status is Status.HALT_FOR_COLLISION:
-            final, reason = "collision", f"collision: {step.detail} at step {step_number}"
-            break
-        status.append(_STEP_WORDS.get(step.status, "moving"))
-        details.append(step.detail)
-        q = step.q
-        rates_log.append(step.joint_rates)
-        configurations.append(q)
-    status.append(final)
-    details.append(reason)
-    return Trajectory(
-        q=np.array(configurations),
-        position_error=np.array(position_errors),
-        orientation_error=np.array(orientation_errors),
-        spectral_radius=np.array(radii),
-        status=status,
-        joint_rates=np.array(rates_log).reshape(len(rates_log), robot.nv),
-        converged=final == "converged",
-        reason=reason,
-        algorithm=controller.algorithm,
-        dt=controller.dt,
-        partition=controller.partition,
-        detail=details,
-    )
+            self.final, self.reason = "collision", f"collision: {step.detail} at step {step_number}"
+            return True
+        self.steps[step_number] = (_STEP_WORDS.get(step.status, "moving"), step.detail)
+        self.log.rates[step_number] = step.joint_rates
+        self.log.q[step_number + 1] = step.q
+        self.step_number = step_number + 1
+        return False
+
+    # ------------------------------------------------------------------ the result
+    def _words(self) -> tuple[list[str], list[str]]:
+        """Each step's status word and detail: the Python steps' own, the core's from its flags."""
+        taken = self.step_number
+        flags = self.log.flags[:taken].tolist()
+        status = [_CORE_WORDS[flag] for flag in flags]
+        details = [""] * taken
+        for step_number, flag in enumerate(flags):
+            if flag & (_RATE_LIMITED | _CLAMPED):
+                details[step_number] = self._core_detail(step_number, flag)
+        for step_number, (word, detail) in self.steps.items():
+            status[step_number], details[step_number] = word, detail
+        return status, details
+
+    def _core_detail(self, step_number: int, flag: int) -> str:
+        """Controller._finish's detail of a step the core took."""
+        parts = []
+        if flag & _RATE_LIMITED:
+            parts.append(f"rates scaled by {self.log.scale[step_number]:.3g} to meet the velocity limits")
+        if flag & _CLAMPED:
+            limit = self.controller.position_limit(int(self.log.hit[step_number]))
+            value = self.log.q[step_number + 1][limit.index]
+            side, bound = ("lower", limit.lower) if value == limit.lower else ("upper", limit.upper)
+            parts.append(f"{limit.joint} reached its {side} limit {bound:.4g}")
+        return "; ".join(parts)
+
+    def trajectory(self) -> Trajectory:
+        taken = self.step_number
+        status, details = self._words()
+        status.append(self.final)
+        details.append(self.reason)
+        log, controller = self.log, self.controller
+        return Trajectory(
+            q=log.q[: taken + 1].copy(),
+            position_error=log.position[: taken + 1].copy(),
+            orientation_error=log.orientation[: taken + 1].copy(),
+            spectral_radius=log.radius[: taken + 1].copy(),
+            status=status,
+            joint_rates=log.rates[:taken].copy(),
+            converged=self.final == "converged",
+            reason=self.reason,
+            algorithm=controller.algorithm,
+            dt=controller.dt,
+            partition=controller.partition,
+            detail=details,
+        )
+
+
+_SATURATED, _RATE_LIMITED, _CLAMPED = 1, 2, 4  # pinrate_core.SATURATED, RATE_LIMITED, CLAMPED
+
+
+def _core_word(flag: int) -> str:
+    statuses = [Status.TWIST_SATURATED] if flag & _SATURATED else []
+    if flag & _RATE_LIMITED:
+        statuses.append(Status.RATE_LIMITED)
+    if flag & _CLAMPED:
+        statuses.append(Status.JOINT_LIMIT)
+    return _STEP_WORDS.get(most_severe(*statuses), "moving")
+
+
+_CORE_WORDS = [_core_word(flag) for flag in range(8)]
+"""The status word of a step the core took, by its flags."""

@@ -1,0 +1,305 @@
+// pinrate.control.Controller.step and pinrate.control.servo_loop.servo as one C++ loop.
+//
+// The loop runs the step's common path: kinematics, pose error, saturation, the conditioning
+// bound, the algorithm, the position-limit test, the velocity-limit scale, integration and
+// the clamp, and the servo's stop rules. Whatever needs more (the singular region, a joint
+// passing a limit, a singular block, a step the decelerate rule must judge one step ahead,
+// a least-squares exact step) is handed back: the Python controller takes that one step and
+// the loop goes on. So each rule is written once in full (in Python) and the common path
+// twice (here, and there), and the test of the two paths holds them together.
+#pragma once
+
+#include <Eigen/LU>
+#include <cmath>
+#include <vector>
+
+#include "closed_form.hpp"
+#include "kinematics.hpp"
+
+namespace pinrate_core {
+
+enum Kernel { EXACT = 0, SCHUR = 1, MCA1 = 2, MCA2 = 3, MCA3 = 4, DLS = 5 };
+
+// What ended a run of the loop.
+enum Outcome { CONVERGED = 0, DIVERGING = 1, STALLED = 2, MAX_STEPS = 3, HANDBACK = 4, FULL = 5 };
+
+// Flags of a step taken here (pinrate.control.Status members met).
+enum StepFlag { SATURATED = 1, RATE_LIMITED_FLAG = 2, CLAMPED = 4 };
+
+struct Limit {
+  int q_index, v_index;
+  double lower, upper;
+};
+
+struct RateLimit {
+  int v_index;
+  double limit;
+};
+
+// The controller's settings, from pinrate.control.Controller (see compiled/servo.py).
+struct Settings {
+  std::vector<int> rows;     // the twist's rows of J, partition order (m linear first)
+  std::vector<int> columns;  // velocity indices of the partition's joints, arm then wrist
+  int m = 0, n_arm = 0;
+  int kernel = MCA1;
+  bool measure_a = false, measure_w = false, measure_j = false;
+  std::vector<double> row_scale;  // (m + k,)
+  double slow_threshold = 0.0, watch_factor = 3.0, watched_step = 0.02;
+  bool watch = true;  // singularity="decelerate" (or auxiliary_elbow): judge big steps near the region
+  double max_linear_speed = INFINITY, max_angular_speed = INFINITY, dt = 0.01;
+  bool position_limits = true;
+  std::vector<Limit> limits;
+  std::vector<RateLimit> rate_limits;
+  double exact_rcond = 1e-12, dls_damping = 1e-2;
+};
+
+struct Blocks {
+  Block A, B, U, W;
+};
+
+// The servo's stop-rule state, carried across hand-backs.
+struct ServoState {
+  long step_number = 0;
+  double best = INFINITY, progress = INFINITY;
+  long progress_step = 0;
+};
+
+// One run's arrays (rows indexed by step number), written in place.
+struct ServoLog {
+  double *q;            // (capacity + 1, nq): q[0] is q0
+  double *rates;        // (capacity, nv)
+  double *position;     // (capacity + 1,)
+  double *orientation;  // (capacity + 1,)
+  double *radius;       // (capacity + 1,)
+  int *flags;           // (capacity,)
+  double *scale;        // (capacity,)
+  int *hit;             // (capacity,): the first limit clamped, -1 for none
+  long capacity;
+};
+
+class Servo {
+ public:
+  Servo(Kinematics &kinematics, Settings settings) : kin_(kinematics), s_(std::move(settings)) {
+    n_ = static_cast<int>(s_.columns.size());
+    k_ = static_cast<int>(s_.rows.size()) - s_.m;
+  }
+
+  // Blocks A, B, U, W of the sensor-frame J (closed_form.blocks).
+  Blocks blocks() const {
+    const auto &J = kin_.jacobian;
+    Blocks b;
+    auto fill = [&](Block &M, int row0, int rows, int col0, int cols) {
+      M.rows = rows;
+      M.cols = cols;
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) M(r, c) = J(s_.rows[row0 + r], s_.columns[col0 + c]);
+    };
+    fill(b.A, 0, s_.m, 0, s_.n_arm);
+    fill(b.B, 0, s_.m, s_.n_arm, n_ - s_.n_arm);
+    fill(b.U, s_.m, k_, 0, s_.n_arm);
+    fill(b.W, s_.m, k_, s_.n_arm, n_ - s_.n_arm);
+    return b;
+  }
+
+  // rho of the smaller of G and H; inf where A or W is singular.
+  static double radius_of(const Blocks &b) {
+    try {
+      return spectral_radius(b.A, b.B, b.U, b.W);
+    } catch (const Singular &) {
+      return INFINITY;
+    }
+  }
+
+  // The loop from state.step_number; returns an Outcome.
+  int run(Eigen::Ref<const Vector> q0, const SE3 &target, double gain, double tol, long stall_steps, long max_steps,
+          double divergence_factor, double stall_improvement, ServoState &state, ServoLog &log) {
+    const int nq = kin_.nq(), nv = kin_.nv();
+    Vector q = q0;
+    for (;; ++state.step_number) {
+      const long step = state.step_number;
+      if (step > log.capacity) return FULL;
+      kin_.compute(q);
+      const Eigen::Matrix<double, 6, 1> full_error = kin_.pose_error(target);
+      double error[6];
+      for (int r = 0; r < s_.m + k_; ++r) error[r] = full_error[s_.rows[r]];
+      const double position = std::sqrt(dot(error, error, s_.m));
+      const double orientation = std::sqrt(dot(error + s_.m, error + s_.m, k_));
+      const Blocks parts = blocks();
+      log.position[step] = position;
+      log.orientation[step] = orientation;
+      log.radius[step] = radius_of(parts);
+      const double total = position + orientation;
+      if (position < tol && orientation < tol) return CONVERGED;
+      state.best = py_min(state.best, total);
+      if (total > divergence_factor * state.best + tol) return DIVERGING;
+      if (total < (1.0 - stall_improvement) * state.progress) {
+        state.progress = total;
+        state.progress_step = step;
+      } else if (step - state.progress_step >= stall_steps) {
+        return STALLED;
+      }
+      if (step == max_steps) return MAX_STEPS;
+      if (step == log.capacity) return FULL;  // no row for the next q
+      double twist[6];
+      for (int r = 0; r < s_.m + k_; ++r) twist[r] = gain * error[r];
+      int flags = 0;
+      if (saturate(twist, s_.m, s_.max_linear_speed)) flags |= SATURATED;
+      if (saturate(twist + s_.m, k_, s_.max_angular_speed)) flags |= SATURATED;
+      const double bound = conditioning_bound(parts);
+      if (bound < s_.slow_threshold) return HANDBACK;  // the singular region: a plan
+      Vector rates = Vector::Zero(nv);
+      if (!solve(parts, twist, rates)) return HANDBACK;
+      if (s_.position_limits && passing(q, rates)) return HANDBACK;
+      if (s_.watch && !(bound >= s_.watch_factor * s_.slow_threshold || max_abs(rates) * s_.dt <= s_.watched_step))
+        return HANDBACK;  // decelerate judges this step one step ahead
+      const double scale = rate_scale(rates);
+      if (scale < 1.0) {
+        rates = rates * scale;
+        flags |= RATE_LIMITED_FLAG;
+      }
+      Vector next = kin_.integrate(q, rates * s_.dt);
+      int hit = -1;
+      if (s_.position_limits) hit = clamp(next);
+      if (hit >= 0) flags |= CLAMPED;
+      log.flags[step] = flags;
+      log.scale[step] = scale;
+      log.hit[step] = hit;
+      std::copy(rates.data(), rates.data() + nv, log.rates + step * nv);
+      std::copy(next.data(), next.data() + nq, log.q + (step + 1) * nq);
+      q = next;
+    }
+  }
+
+  int n() const { return n_; }
+  Kinematics &kinematics() const { return kin_; }
+
+ private:
+  Kinematics &kin_;
+  Settings s_;
+  int n_ = 0, k_ = 0;
+
+  // spatial.saturate: scaled down, direction kept, to norm <= limit.
+  static bool saturate(double *values, int count, double limit) {
+    const double norm = std::sqrt(dot(values, values, count));
+    if (norm > limit) {
+      const double factor = limit / norm;
+      for (int i = 0; i < count; ++i) values[i] = values[i] * factor;
+      return true;
+    }
+    return false;
+  }
+
+  static double max_abs(const Vector &rates) {
+    double largest = 0.0;
+    for (int i = 0; i < rates.size(); ++i) largest = std::fmax(largest, std::fabs(rates[i]));
+    return largest;
+  }
+
+  Eigen::MatrixXd reduced() const {
+    Eigen::MatrixXd R(s_.m + k_, n_);
+    for (int r = 0; r < s_.m + k_; ++r)
+      for (int c = 0; c < n_; ++c) R(r, c) = kin_.jacobian(s_.rows[r], s_.columns[c]);
+    return R;
+  }
+
+  // Controller._conditioning_bound: the least 1 / (||M||_F ||M^-1||_F) of the measured blocks.
+  double conditioning_bound(const Blocks &b) const {
+    double bound = INFINITY;
+    if (s_.measure_j) {
+      Eigen::MatrixXd scaled = reduced();
+      for (int r = 0; r < scaled.rows(); ++r) scaled.row(r) *= s_.row_scale[r];
+      if (scaled.rows() != scaled.cols()) return 0.0;
+      Eigen::PartialPivLU<Eigen::MatrixXd> lu(scaled);
+      const Eigen::MatrixXd inverse = lu.inverse();
+      const double matrix_norm2 = scaled.squaredNorm(), inverse_norm2 = inverse.squaredNorm();
+      const double product = matrix_norm2 * inverse_norm2;
+      if (!(product > 0.0) || !std::isfinite(product)) return 0.0;
+      bound = py_min(bound, 1.0 / std::sqrt(product));
+    }
+    try {
+      if (s_.measure_a && b.A.rows && b.A.cols) bound = py_min(bound, inverse_condition_bound(b.A, inverse(b.A, "A")));
+      if (s_.measure_w && b.W.rows && b.W.cols) bound = py_min(bound, inverse_condition_bound(b.W, inverse(b.W, "W")));
+    } catch (const Singular &) {
+      return 0.0;
+    }
+    return bound;
+  }
+
+  // solvers.rates.partition_rates; false where Python must take the step (a singular block,
+  // an exact step that needs the least-squares solution).
+  bool solve(const Blocks &b, const double *twist, Vector &rates) const {
+    if (s_.kernel == EXACT || s_.kernel == DLS) {
+      const Eigen::MatrixXd J = reduced();
+      Eigen::VectorXd command(s_.m + k_);
+      for (int r = 0; r < s_.m + k_; ++r) command[r] = twist[r];
+      Eigen::VectorXd solved;
+      if (s_.kernel == EXACT) {
+        if (J.rows() != J.cols() || J.rows() == 0) return false;
+        solved = J.partialPivLu().solve(command);
+        // reference.exact: a solution this large betrays a singular J (least squares instead).
+        const double growth = J.squaredNorm() * solved.squaredNorm() * (s_.exact_rcond * s_.exact_rcond);
+        if (!(growth <= command.squaredNorm())) return false;
+      } else {
+        Eigen::MatrixXd normal = J * J.transpose();
+        normal.diagonal().array() += s_.dls_damping * s_.dls_damping;
+        solved = J.transpose() * normal.partialPivLu().solve(command);
+      }
+      for (int c = 0; c < n_; ++c) rates[s_.columns[c]] = solved[c];
+      return true;
+    }
+    Vec3 v, omega;
+    v.n = s_.m;
+    omega.n = k_;
+    for (int r = 0; r < s_.m; ++r) v[r] = twist[r];
+    for (int r = 0; r < k_; ++r) omega[r] = twist[s_.m + r];
+    Rates solved;
+    try {
+      switch (s_.kernel) {
+        case SCHUR: solved = schur(b.A, b.B, b.U, b.W, v, omega); break;
+        case MCA1: solved = mca1(b.A, b.B, b.U, b.W, v, omega); break;
+        case MCA2: solved = mca2(b.A, b.B, b.U, b.W, v, omega); break;
+        default: solved = mca3(b.A, b.B, b.U, b.W, v, omega); break;
+      }
+    } catch (const Singular &) {
+      return false;
+    }
+    for (int c = 0; c < s_.n_arm; ++c) rates[s_.columns[c]] = solved.arm[c];
+    for (int c = s_.n_arm; c < n_; ++c) rates[s_.columns[c]] = solved.wrist[c - s_.n_arm];
+    return true;
+  }
+
+  // Controller._passing: some joint's commanded rate carries it past a limit within dt.
+  bool passing(const Vector &q, const Vector &rates) const {
+    for (const Limit &limit : s_.limits) {
+      const double value = q[limit.q_index] + rates[limit.v_index] * s_.dt;
+      if (value > limit.upper || value < limit.lower) return true;
+    }
+    return false;
+  }
+
+  // Controller._rate_scale: the largest factor <= 1 meeting every velocity limit.
+  double rate_scale(const Vector &rates) const {
+    double scale = 1.0;
+    for (const RateLimit &row : s_.rate_limits) {
+      const double magnitude = std::fabs(rates[row.v_index]);
+      if (magnitude * scale > row.limit) scale = row.limit / magnitude;
+    }
+    return scale;
+  }
+
+  // Controller._clamp: q clamped to the limits; the first limit it was past, or -1.
+  int clamp(Vector &q) const {
+    int hit = -1;
+    for (std::size_t i = 0; i < s_.limits.size(); ++i) {
+      const Limit &limit = s_.limits[i];
+      const double value = q[limit.q_index];
+      if (value < limit.lower || value > limit.upper) {
+        q[limit.q_index] = value < limit.lower ? limit.lower : limit.upper;
+        if (hit < 0) hit = static_cast<int>(i);
+      }
+    }
+    return hit;
+  }
+};
+
+}  // namespace pinrate_core

@@ -1,0 +1,93 @@
+"""A Robot's kinematics rebuilt in the compiled core: its joints, placements, tip and sensor.
+
+The core rebuilds a private Pinocchio model from the Python model's arrays (joint kinds,
+parents, placements, the tip and sensor frames), so it links no Pinocchio library and makes
+the same Pinocchio calls on the same numbers as the Python side.
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import Any
+
+import numpy as np
+
+from ..errors import UnsupportedByCoreError
+from ..kinematics.manipulator import Robot
+from .backend import core_module
+
+REBUILT_JOINTS = frozenset(
+    {
+        "JointModelRX",
+        "JointModelRY",
+        "JointModelRZ",
+        "JointModelRevoluteUnaligned",
+        "JointModelRUBX",
+        "JointModelRUBY",
+        "JointModelRUBZ",
+        "JointModelRevoluteUnboundedUnaligned",
+        "JointModelPX",
+        "JointModelPY",
+        "JointModelPZ",
+        "JointModelPrismaticUnaligned",
+    }
+)
+"""Pinocchio joint kinds the core rebuilds: every kind a URDF's revolute, continuous and
+prismatic joints become (a robot with any other runs on Python)."""
+
+_UNALIGNED = ("JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnaligned", "JointModelPrismaticUnaligned")
+
+
+_cache: weakref.WeakKeyDictionary[Robot, Any] = weakref.WeakKeyDictionary()
+
+
+def joint_arrays(robot: Robot) -> tuple[list[str], list[int], np.ndarray, np.ndarray]:
+    """(kinds, parents, axes (nj, 3), placements (nj, 4, 4)) of the joints 1.. of the model.
+
+    Raises:
+        UnsupportedByCoreError: a joint kind outside :data:`REBUILT_JOINTS`.
+    """
+    model = robot.model
+    kinds, parents, axes, placements = [], [], [], []
+    for joint_id in range(1, model.njoints):
+        joint = model.joints[joint_id]
+        kind = joint.shortname()
+        if kind not in REBUILT_JOINTS:
+            name = model.names[joint_id]
+            raise UnsupportedByCoreError(f"joint {name!r} is a {kind}, which the compiled core does not rebuild")
+        axis = np.array(joint.extract().axis, dtype=float) if kind in _UNALIGNED else np.zeros(3)
+        kinds.append(kind)
+        parents.append(int(model.parents[joint_id]))
+        axes.append(axis)
+        placements.append(np.array(model.jointPlacements[joint_id].homogeneous))
+    return kinds, parents, np.array(axes).reshape(-1, 3), np.array(placements).reshape(-1, 4, 4)
+
+
+def core_kinematics(robot: Robot) -> Any:
+    """The robot's ``pinrate_core.Kinematics`` (built once per Robot), or None where the
+    Python path is chosen.
+
+    Raises:
+        UnsupportedByCoreError: the robot has a joint the core does not rebuild.
+    """
+    core = core_module()
+    if core is None:
+        return None
+    kinematics = _cache.get(robot)
+    if kinematics is None:
+        kinds, parents, axes, placements = joint_arrays(robot)
+        frames = robot.model.frames
+        tip, sensor = frames[robot.tip_id], frames[robot.sensor_id]
+        kinematics = core.Kinematics(
+            kinds,
+            parents,
+            np.ascontiguousarray(axes),
+            np.ascontiguousarray(placements),
+            int(tip.parentJoint),
+            np.ascontiguousarray(tip.placement.homogeneous),
+            int(sensor.parentJoint),
+            np.ascontiguousarray(sensor.placement.homogeneous),
+            robot.sensor_id == robot.tip_id,
+        )
+        _cache[robot] = kinematics
+    return kinematics

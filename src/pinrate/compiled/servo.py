@@ -1,0 +1,112 @@
+"""The compiled servo loop and ρ map: a controller's settings as plain numbers, handed to
+``pinrate_core.Servo`` (see ``core/src/servo.hpp`` for what the loop does and hands back)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import UnsupportedByCoreError
+from ..kinematics.manipulator import Robot
+from .backend import core_module
+from .kinematics import core_kinematics
+
+KERNELS = ("exact", "schur", "mca1", "mca2", "mca3", "dls")
+"""The algorithms in the core's order (``pinrate_core.KERNELS``)."""
+
+
+@dataclass(frozen=True)
+class ServoSettings:
+    """What the compiled step needs of a :class:`~pinrate.control.Controller`.
+
+    Attributes:
+        rows: J's rows of the twist, partition order (m linear first), indices 0-5.
+        columns: velocity indices of the partition's joints, arm then wrist.
+        m, n_arm: linear rows, arm joints.
+        algorithm: a name of :data:`KERNELS`.
+        measured: the blocks the conditioning bound measures ("A", "W", "J").
+        row_scale: 1/L on linear rows, 1 on angular (m + k,).
+        slow_threshold: c under which a step is in the singular region (handed back).
+        watch, watch_factor, watched_step: the decelerate rule's one-step-ahead test.
+        max_linear_speed, max_angular_speed: m/s, rad/s (inf for none).
+        dt: s.
+        position_limits: keep q within the limits.
+        limits: (L, 4) rows of q index, v index, lower, upper (rad or m).
+        rate_limits: (R, 2) rows of v index, limit (rad/s or m/s).
+        exact_rcond, dls_damping: :mod:`pinrate.solvers.reference`'s constants.
+    """
+
+    rows: tuple[int, ...]
+    columns: tuple[int, ...]
+    m: int
+    n_arm: int
+    algorithm: str
+    measured: tuple[str, ...]
+    row_scale: tuple[float, ...]
+    slow_threshold: float
+    watch: bool
+    watch_factor: float
+    watched_step: float
+    max_linear_speed: float
+    max_angular_speed: float
+    dt: float
+    position_limits: bool
+    limits: np.ndarray
+    rate_limits: np.ndarray
+    exact_rcond: float
+    dls_damping: float
+
+
+class CoreServo:
+    """A controller's compiled twin: ``run`` is the servo loop, ``spectral_radius_at`` the
+    ρ map, both in C++ (the GIL released)."""
+
+    def __init__(self, robot: Robot, settings: ServoSettings) -> None:
+        kinematics = core_kinematics(robot)
+        core = core_module()
+        if kinematics is None or core is None:
+            raise UnsupportedByCoreError("the Python path is chosen")
+        if len(settings.rows) - settings.m > 3 or settings.m > 3 or settings.n_arm > 3:
+            raise UnsupportedByCoreError("the compiled core takes blocks of at most 3x3")
+        self.core = core
+        self.robot = robot
+        self.settings = settings
+        self._servo = core.Servo(
+            kinematics,
+            list(settings.rows),
+            list(settings.columns),
+            settings.m,
+            settings.n_arm,
+            KERNELS.index(settings.algorithm),
+            list(settings.measured),
+            list(settings.row_scale),
+            settings.slow_threshold,
+            settings.watch,
+            settings.watch_factor,
+            settings.watched_step,
+            settings.max_linear_speed,
+            settings.max_angular_speed,
+            settings.dt,
+            settings.position_limits,
+            np.ascontiguousarray(settings.limits, dtype=float).reshape(-1, 4),
+            np.ascontiguousarray(settings.rate_limits, dtype=float).reshape(-1, 2),
+            settings.exact_rcond,
+            settings.dls_damping,
+        )
+
+    def run(self, q: np.ndarray, target: np.ndarray, *arguments: Any) -> tuple[int, int, float, float, int]:
+        """The servo loop from ``q`` (see ``core/src/module.cpp``'s ``run_servo``):
+        (outcome, step number, best, progress, progress step)."""
+        return self._servo.run(q, target, *arguments)
+
+    def spectral_radius_at(self, configurations: np.ndarray) -> np.ndarray:
+        """ρ of the smaller of G and H at each configuration (N, nq); inf where A or W is singular."""
+        radii = np.empty(configurations.shape[0])
+        self._servo.spectral_radius_at(np.ascontiguousarray(configurations, dtype=float), radii)
+        return radii
+
+    def solve_seconds(self, q: np.ndarray, twist: np.ndarray, algorithm: str, repeats: int) -> float:
+        """Seconds per call of ``algorithm``'s solve alone (exact, mca1 or mca2) at q, in C++."""
+        return self._servo.solve_timing(q, np.ascontiguousarray(twist, dtype=float), KERNELS.index(algorithm), repeats)
