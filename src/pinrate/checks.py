@@ -120,7 +120,13 @@ def as_rng(rng: RngLike) -> np.random.Generator:
 
 
 def as_pose(target: object) -> pin.SE3:
-    """A pose from a 4x4 homogeneous matrix or a pinocchio SE3; InputError otherwise."""
+    """A pose from a 4x4 homogeneous matrix or a pinocchio SE3; InputError otherwise.
+
+    The rotation must be orthonormal to 1e-6 (|R^T R - I| <= 1e-6 + 1e-5 |I| entrywise, as
+    ``np.allclose`` would judge) with det R > 0, and the last row [0, 0, 0, 1] (to 1e-8 +
+    1e-5 |b|). On Python floats: a servo call checks its target, and numpy's per-call cost
+    on a 4x4 was most of the call's set-up.
+    """
     if isinstance(target, pin.SE3):
         matrix = np.array(target.homogeneous)
     else:
@@ -130,16 +136,25 @@ def as_pose(target: object) -> pin.SE3:
             raise InputError("target must be a 4x4 homogeneous matrix or a pinocchio.SE3") from None
     if matrix.shape != (4, 4):
         raise InputError(f"target must be a 4x4 homogeneous matrix, got shape {matrix.shape}")
-    if not np.isfinite(matrix).all():
+    values = matrix.ravel().tolist()
+    if not all(math.isfinite(value) for value in values):
         raise InputError("target contains NaN or inf")
-    if np.abs(matrix[:3, 3]).max() > PHYSICAL_BOUND:
+    position = (values[3], values[7], values[11])
+    if max(abs(value) for value in position) > PHYSICAL_BOUND:
         raise InputError(f"target's position is beyond the physical bound ±{PHYSICAL_BOUND:g} m: {matrix[:3, 3]}")
-    rotation = matrix[:3, :3]
-    if not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-6) or np.linalg.det(rotation) < 0:
+    columns = [(values[c], values[4 + c], values[8 + c]) for c in range(3)]
+    for i in range(3):
+        for j in range(3):
+            gram = columns[i][0] * columns[j][0] + columns[i][1] * columns[j][1] + columns[i][2] * columns[j][2]
+            if abs(gram - (1.0 if i == j else 0.0)) > 1e-6 + (1e-5 if i == j else 0.0):
+                raise InputError("target's upper-left 3x3 block is not a rotation matrix")
+    (a, d, g), (b, e, h), (c, f, i) = columns
+    if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0:
         raise InputError("target's upper-left 3x3 block is not a rotation matrix")
-    if not np.allclose(matrix[3], [0.0, 0.0, 0.0, 1.0]):
+    last_row = zip(values[12:], (0.0, 0.0, 0.0, 1.0), strict=True)
+    if any(abs(value - wanted) > 1e-8 + 1e-5 * abs(wanted) for value, wanted in last_row):
         raise InputError("target's last row must be [0, 0, 0, 1]")
-    return pin.SE3(rotation, matrix[:3, 3])
+    return pin.SE3(matrix[:3, :3], matrix[:3, 3])
 
 
 def check_output_folder(path: str | os.PathLike[str], what: str) -> Path:

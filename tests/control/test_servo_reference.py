@@ -8,11 +8,13 @@ algorithm, panda, SCARA and Barker's arm, and the papers' simulations (Fig. 6 an
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
 
 import pinrate
+from pinrate.compiled import use
 from support import DATA
 
 REFERENCE = np.load(DATA / "servo_reference.npz")
@@ -22,6 +24,15 @@ RUNS = sorted({key.split("/")[0] for key in REFERENCE.files})
 # the run is deterministic to the bit on any machine; numpy's LAPACK (exact, dls, the
 # pseudo-inverse of panda's 3x4 arm block) may pick other kernels on another CPU.
 LAPACK_RUNS = {"demo-ur5-exact-0", "demo-ur5-dls-0", "demo-panda-mca1-0"}
+
+
+@pytest.fixture(autouse=True)
+def python_path() -> Iterator[None]:
+    """The release's runs were made on Python: the Python path must reproduce them to the bit
+    (the compiled path is held to the Python one in tests/compiled/test_two_paths.py)."""
+    use("python")
+    yield
+    use(None)
 
 
 def run(name: str) -> pinrate.Trajectory:

@@ -10,6 +10,6 @@ from __future__ import annotations
 
 from .backend import Backend, backend, core_module, use
 from .kinematics import core_kinematics
-from .servo import CoreServo, ServoSettings
+from .servo import CoreServo, ServoSettings, rho_map
 
-__all__ = ["Backend", "CoreServo", "ServoSettings", "backend", "core_kinematics", "core_module", "use"]
+__all__ = ["Backend", "CoreServo", "ServoSettings", "backend", "core_kinematics", "core_module", "rho_map", "use"]

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import math
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -110,3 +112,46 @@ class CoreServo:
     def solve_seconds(self, q: np.ndarray, twist: np.ndarray, algorithm: str, repeats: int) -> float:
         """Seconds per call of ``algorithm``'s solve alone (exact, mca1 or mca2) at q, in C++."""
         return self._servo.solve_timing(q, np.ascontiguousarray(twist, dtype=float), KERNELS.index(algorithm), repeats)
+
+
+_maps: weakref.WeakKeyDictionary[Robot, dict[tuple[object, ...], CoreServo]] = weakref.WeakKeyDictionary()
+
+
+def rho_map(robot: Robot, rows: tuple[int, ...], columns: tuple[int, ...], m: int, n_arm: int) -> CoreServo | None:
+    """A compiled ρ map of ``robot`` for a partition's rows and columns (built once per robot
+    and partition), or None where the Python path is chosen or the core does not cover it
+    (a joint it does not rebuild; blocks that are not square of size 1 to 3)."""
+    k, n_wrist = len(rows) - m, len(columns) - n_arm
+    if core_module() is None:
+        return None
+    if not (m == n_arm and k == n_wrist and 1 <= m <= 3 and 1 <= k <= 3):
+        return None
+    key = (rows, columns, m, n_arm)
+    maps = _maps.setdefault(robot, {})
+    if key not in maps:
+        settings = ServoSettings(
+            rows=rows,
+            columns=columns,
+            m=m,
+            n_arm=n_arm,
+            algorithm="mca1",
+            measured=(),
+            row_scale=(1.0,) * len(rows),
+            slow_threshold=0.0,
+            watch=False,
+            watch_factor=0.0,
+            watched_step=0.0,
+            max_linear_speed=math.inf,
+            max_angular_speed=math.inf,
+            dt=1.0,
+            position_limits=False,
+            limits=np.zeros((0, 4)),
+            rate_limits=np.zeros((0, 2)),
+            exact_rcond=0.0,
+            dls_damping=0.0,
+        )
+        try:
+            maps[key] = CoreServo(robot, settings)
+        except UnsupportedByCoreError:
+            return None
+    return maps[key]

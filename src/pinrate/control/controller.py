@@ -28,6 +28,7 @@ Each step at configuration q (Shoham & Koren §2, Fig. 3):
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -38,7 +39,7 @@ import pinocchio as pin
 from ..checks import check_positive, check_vector
 from ..compiled import CoreServo, ServoSettings, backend, core_kinematics
 from ..errors import InputError, SingularBlockError, UnsupportedByCoreError
-from ..kinematics.axes import wrist_axes, wrist_centre
+from ..kinematics.axes import Axis, wrist_axes, wrist_centre
 from ..kinematics.home import generic_ranks
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex, partition_for
@@ -174,6 +175,53 @@ VELOCITY_LIMIT_UNLIMITED = 1e6
 m/s) means no limit."""
 
 
+class _Facts(NamedTuple):
+    """What a controller needs of its robot and partition that no option changes."""
+
+    limits: tuple[_Limit, ...]  # every 1-DOF joint with finite position limits (a jog may move any)
+    urdf_velocity_limits: np.ndarray  # (nv,), inf where the URDF gives none
+    characteristic_length: float  # L of J at home
+    ranks: tuple[int, int, int]  # generic ranks of J, A, W
+    velocity_of: dict[str, int]  # joint name -> its first velocity index
+    joggable: tuple[str, ...]  # the 1-DOF joints
+    wrist_axes: tuple[Axis, ...]  # the wrist's first two rotating joints
+    wrist_body: int  # the joint whose body carries the wrist centre
+
+
+_FACTS: weakref.WeakKeyDictionary[Robot, dict[Partition, _Facts]] = weakref.WeakKeyDictionary()
+
+
+def _facts(robot: Robot, partition: Partition) -> _Facts:
+    """The :class:`_Facts` of ``robot`` and ``partition``, computed once (a servo call builds a
+    controller, and these cost more than the run's loop)."""
+    cache = _FACTS.setdefault(robot, {})
+    if partition not in cache:
+        model = robot.model
+        index = partition.resolve(robot)
+        limits = []
+        for joint in robot.joint_names:
+            bounds = robot.joint_limits(joint)
+            if bounds is not None:
+                joint_model = model.joints[robot.joint_id(joint)]
+                limits.append(_Limit(joint, joint_model.idx_q, joint_model.idx_v, *bounds))
+        urdf = np.array(model.velocityLimit, dtype=float)
+        home = robot.jacobian_unchecked(robot.home())[np.ix_(index.rows, index.columns)]
+        wrist_ids = [robot.joint_id(name) for name in partition.wrist]
+        cache[partition] = _Facts(
+            limits=tuple(limits),
+            urdf_velocity_limits=np.where((urdf > 0) & (urdf < VELOCITY_LIMIT_UNLIMITED), urdf, np.inf),
+            characteristic_length=characteristic_length(home, index.m),
+            ranks=generic_ranks(robot, partition),
+            velocity_of={name: model.joints[robot.joint_id(name)].idx_v for name in robot.joint_names},
+            joggable=tuple(name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1),
+            wrist_axes=wrist_axes(model, wrist_ids),
+            # The wrist centre rides on the body that carries the first wrist joint of the
+            # chain (or the tip's body without a wrist).
+            wrist_body=model.parents[min(wrist_ids)] if wrist_ids else model.frames[robot.tip_id].parentJoint,
+        )
+    return cache[partition]
+
+
 class _Plan(NamedTuple):
     """How a step in the singular region solves: the change of variables of the wrist and the
     frozen joints, the inversion used, and what to report."""
@@ -296,8 +344,9 @@ class Controller:
         if not isinstance(position_limits, bool):
             raise InputError(f"position_limits must be True or False, not {position_limits!r}")
         self.position_limits = position_limits
-        self._limits = self._position_limits()
-        self.velocity_limits = self._velocity_limits(velocity_limits)
+        facts = _facts(robot, self.partition)
+        self._limits = facts.limits
+        self.velocity_limits = self._velocity_limits(velocity_limits, facts.urdf_velocity_limits)
         self.acceleration_limits = (
             None if acceleration_limits is None else self._per_joint(acceleration_limits, "acceleration_limits")
         )
@@ -311,25 +360,18 @@ class Controller:
         self._names = self.partition.arm + self.partition.wrist  # partition order
         self._positions = {name: position for position, name in enumerate(self._names)}
         self._measured = measured_blocks(self.algorithm)
-        home = robot.jacobian_unchecked(robot.home())[np.ix_(index.rows, index.columns)]
-        self.characteristic_length = characteristic_length(home, index.m)
+        self.characteristic_length = facts.characteristic_length
         """L (m): J's linear rows are divided by it before J is measured or pseudo-inverted."""
         self._row_scale = row_scale(index.m, index.k, self.characteristic_length)
         self._row_scale_column = self._row_scale[:, None]
-        ranks = generic_ranks(robot, self.partition)
+        ranks = facts.ranks
         self._ranks = {"J": ranks[0], "A": ranks[1], "W": ranks[2]}
         self._square_j = index.rows.size == index.columns.size == ranks[0]
-        model = robot.model
-        self._velocity_of = {name: model.joints[robot.joint_id(name)].idx_v for name in robot.joint_names}
-        self.joggable: tuple[str, ...] = tuple(
-            name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1
-        )
-        wrist_ids = [robot.joint_id(name) for name in self.partition.wrist]
-        self._wrist_axes = wrist_axes(model, wrist_ids)
-        # The wrist centre rides on the body that carries the first wrist joint of the chain
-        # (or the tip's body without a wrist).
-        self._wrist_body = model.parents[min(wrist_ids)] if wrist_ids else model.frames[robot.tip_id].parentJoint
-        self._centre_data = model.createData()
+        self._velocity_of = facts.velocity_of
+        self.joggable: tuple[str, ...] = facts.joggable
+        self._wrist_axes = facts.wrist_axes
+        self._wrist_body = facts.wrist_body
+        self._centre_data: pin.Data | None = None  # Uncoupled commands' own, made on first use
         self.posture_gain = check_positive(posture_gain, "posture_gain")
         self._posture = self._posture_joints(posture)
         self.elbow: Elbow | None = None
@@ -480,22 +522,10 @@ class Controller:
         weakest = self.conditioning(q)
         return weakest.value < self.singular_threshold and position in carrying_joints(weakest)
 
-    def _position_limits(self) -> list[_Limit]:
-        """Every 1-DOF joint with finite position limits: a jog may move joints outside the
-        partition too."""
-        limits = []
-        for joint in self.robot.joint_names:
-            bounds = self.robot.joint_limits(joint)
-            if bounds is not None:
-                model = self.robot.model.joints[self.robot.joint_id(joint)]
-                limits.append(_Limit(joint, model.idx_q, model.idx_v, *bounds))
-        return limits
-
-    def _velocity_limits(self, limits: object) -> np.ndarray:
+    def _velocity_limits(self, limits: object, urdf: np.ndarray) -> np.ndarray:
         """Per velocity component (nv,), inf where there is none."""
         if limits is None:
-            urdf = np.array(self.robot.model.velocityLimit, dtype=float)
-            return np.where((urdf > 0) & (urdf < VELOCITY_LIMIT_UNLIMITED), urdf, np.inf)
+            return urdf.copy()
         return self._per_joint(limits, "velocity_limits")
 
     def _per_joint(self, limits: object, what: str) -> np.ndarray:
@@ -751,7 +781,10 @@ class Controller:
         """(m, n_arm): the wrist centre's velocity per arm joint rate, in the sensor frame's
         controlled linear axes (m/s per rad/s): a point of the body that carries the first
         wrist joint, so the wrist joints do not move it."""
-        model, data = self.robot.model, self._centre_data
+        model = self.robot.model
+        if self._centre_data is None:
+            self._centre_data = model.createData()
+        data = self._centre_data
         q = observation.q
         index = self.index
         pin.computeJointJacobians(model, data, q)

@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..checks import MAX_SAMPLES, RngLike, check_count
+from ..compiled import rho_map
 from ..errors import InputError
 from ..kinematics.manipulator import Robot, RobotSpec
 from ..kinematics.partition import Partition, partition_for
@@ -84,8 +85,15 @@ def _spectral_radius_of_chunk(spec: RobotSpec, partition: Partition, configurati
 
 
 def _spectral_radius(robot: Robot, partition: Partition, configurations: np.ndarray) -> np.ndarray:
-    """ρ at each configuration (N, nq) of ``robot``: Pinocchio Jacobians, batched block algebra."""
+    """ρ at each configuration (N, nq) of ``robot``: in the compiled core where it covers the
+    robot and partition (Jacobians and closed forms in one C++ loop), else Pinocchio
+    Jacobians and the batched block algebra."""
     index = partition.resolve(robot)
+    core = rho_map(
+        robot, tuple(index.rows.tolist()), tuple(index.columns.tolist()), index.m, int(index.arm_columns.size)
+    )
+    if core is not None:
+        return core.spectral_radius_at(configurations)
     jacobians = partition_jacobians(robot, configurations, partition)
     m, n_arm = index.m, index.arm_columns.size
     return batched.spectral_radius(
