@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: demo test lint typecheck bench urdf docs clean
+.PHONY: demo test core lint typecheck bench urdf docs clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -13,10 +13,35 @@ $(VENV)/.installed: $(BIN)/python pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@
 
-demo: $(VENV)/.installed
+# The compiled core (core/, pinrate_core): built where a C++ compiler works, skipped where
+# none does (pinrate then runs its pure-Python path). PINRATE_CORE=0 skips it on purpose.
+# It costs about 90 s of compile time and 2.5 GB of memory, once.
+CORE_BUILD_DEPS := scikit-build-core nanobind cmake ninja cmeel-eigen
+PINRATE_CORE ?= 1
+$(VENV)/.core: $(VENV)/.installed core/pyproject.toml core/CMakeLists.txt $(wildcard core/src/*)
+	@if [ "$(PINRATE_CORE)" = 0 ]; then \
+		$(BIN)/python -m pip uninstall --quiet --yes pinrate-core 2>/dev/null; \
+		echo "pinrate: the compiled core is off (PINRATE_CORE=0): the pure-Python path runs"; \
+	elif $(BIN)/python -m pip install --quiet $(CORE_BUILD_DEPS) && \
+		$(BIN)/python -m pip install --quiet --no-build-isolation ./core; then \
+		echo "pinrate: compiled core built ($$($(BIN)/python -c 'import pinrate.compiled as c; print(c.backend())'))"; \
+	else \
+		$(BIN)/python -m pip uninstall --quiet --yes pinrate-core 2>/dev/null; \
+		echo "pinrate: the compiled core did not build (no C++ compiler?): the pure-Python path runs"; \
+	fi
+	@echo $(PINRATE_CORE) > $@
+
+# A change of PINRATE_CORE rebuilds (or removes) the core.
+ifneq ($(shell cat $(VENV)/.core 2>/dev/null),$(PINRATE_CORE))
+.PHONY: $(VENV)/.core
+endif
+
+core: $(VENV)/.core
+
+demo: $(VENV)/.core
 	$(BIN)/pinrate demo ur5
 
-test: $(VENV)/.installed
+test: $(VENV)/.core
 	$(BIN)/ruff check src tests examples benchmarks
 	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q
@@ -33,7 +58,7 @@ bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/step.py
 
 clean:
-	rm -rf $(VENV) build src/*.egg-info .pytest_cache
+	rm -rf $(VENV) build core/build src/*.egg-info .pytest_cache
 
 urdf: $(VENV)/.installed
 	$(BIN)/python -c "from pinrate.robots import write_urdfs; write_urdfs('urdf')"

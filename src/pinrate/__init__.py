@@ -37,6 +37,7 @@ _SOURCES = {
     "Teleop": "teleop",
     "Trajectory": "control",
     "Uncoupled": "control",
+    "backend": "compiled",
     "convergence": "theorem",
     "joint_rates": "solvers",
     "load": "robots",
@@ -64,6 +65,7 @@ __all__ = [
     "Trajectory",
     "Uncoupled",
     "__version__",
+    "backend",
     "convergence",
     "joint_rates",
     "load",
@@ -74,6 +76,7 @@ __all__ = [
 
 if TYPE_CHECKING:
     from . import robots
+    from .compiled import backend
     from .control import Controller, JointJog, PoseGoal, Status, Step, Trajectory, Uncoupled, servo
     from .errors import FrameError, InputError, LoadError, PinrateError, SingularBlockError
     from .kinematics import Partition, Robot

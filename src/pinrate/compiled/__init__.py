@@ -8,7 +8,7 @@ keeps everything on the pure-Python path.
 
 from __future__ import annotations
 
-from .backend import Backend, backend, core_module, use
+from .core import Backend, backend, core_module, use
 from .kinematics import core_kinematics
 from .servo import CoreServo, ServoSettings, rho_map
 

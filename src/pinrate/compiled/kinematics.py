@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import UnsupportedByCoreError
 from ..kinematics.manipulator import Robot
-from .backend import core_module
+from .core import core_module
 
 REBUILT_JOINTS = frozenset(
     {

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import UnsupportedByCoreError
 from ..kinematics.manipulator import Robot
-from .backend import core_module
+from .core import core_module
 from .kinematics import core_kinematics
 
 KERNELS = ("exact", "schur", "mca1", "mca2", "mca3", "dls")

@@ -43,7 +43,7 @@ from ..kinematics.axes import Axis, wrist_axes, wrist_centre
 from ..kinematics.home import generic_ranks
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex, partition_for
-from ..kinematics.spatial import pose_error, saturate
+from ..kinematics.spatial import norm, pose_error, saturate
 from ..solvers import closed_form
 from ..solvers.conditioning import (
     characteristic_length,
@@ -1271,8 +1271,7 @@ class Controller:
 def error_norms(observation: Observation, m: int) -> tuple[float, float]:
     """(position error in m, rotation error in rad) of an observation taken against a goal."""
     assert observation.error is not None
-    linear, angular = observation.error[:m], observation.error[m:]
-    return math.sqrt(float(linear @ linear)), math.sqrt(float(angular @ angular))
+    return norm(observation.error[:m]), norm(observation.error[m:])
 
 
 __all__ = [

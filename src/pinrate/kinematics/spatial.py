@@ -31,10 +31,20 @@ def pose_error(world_T_tip: pin.SE3, world_T_sensor: pin.SE3, target: pin.SE3) -
     )
 
 
+def norm(values: np.ndarray) -> float:
+    """The Euclidean norm of a short vector, its squares summed left to right on Python floats
+    (the compiled core sums the same way, so the two paths agree to the bit; numpy's BLAS
+    may sum in another order)."""
+    total = 0.0
+    for value in values.tolist():
+        total += value * value
+    return math.sqrt(total)
+
+
 def saturate(values: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
     """``values`` scaled down, direction kept, to Euclidean norm at most ``limit``; and
     whether it was scaled."""
-    norm = math.sqrt(float(values @ values))
-    if norm > limit:
-        return values * (limit / norm), True
+    length = norm(values)
+    if length > limit:
+        return values * (limit / length), True
     return values, False

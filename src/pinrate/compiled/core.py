@@ -21,6 +21,9 @@ ENVIRONMENT = "PINRATE_BACKEND"
 
 CHOICES = ("auto", "python", "compiled")
 
+CORE_MODULE = "pinrate_core"
+"""The extension module's name."""
+
 CORE_ABI = 1
 """The ``pinrate_core.ABI`` this pinrate speaks; a core of another ABI is not used."""
 
@@ -57,7 +60,7 @@ def _import_core() -> tuple[ModuleType | None, str]:
     global _loaded
     if _loaded is None:
         try:
-            module = importlib.import_module("pinrate_core")
+            module = importlib.import_module(CORE_MODULE)
         except ImportError as error:
             _loaded = (None, f"the compiled core is not installed ({error}); pip install ./core builds it")
         else:

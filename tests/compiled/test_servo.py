@@ -1,0 +1,136 @@
+"""One behaviour, two implementations: the compiled servo loop (pinrate_core, with Python
+taking the steps it hands back) against the pure-Python loop.
+
+Where both make the same Pinocchio calls and the same float operations (the sensor at the
+tip, a closed-form block kernel) the runs must agree to the bit; where the Python side
+goes through numpy's BLAS or LAPACK (the exact and dls solves, a sensor elsewhere on the
+arm), to 1e-12. The statuses, the details and the reason must be the same words.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+import pinrate
+from compiled_core import needs_core, path
+from pinrate.control.controller import Controller
+from pinrate.kinematics.targets import nearby_target
+from support import DATA
+
+pytestmark = needs_core
+
+REFERENCE = np.load(DATA / "servo_reference.npz")
+REFERENCE_RUNS = sorted({key.split("/")[0] for key in REFERENCE.files})
+CLOSED_FORM = ("schur", "mca1", "mca2", "mca3")
+ROBOTS = ("ur5", "scara", "barker_arm", "kinova", "planar_polar")
+
+
+@pytest.fixture
+def python_steps(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[int]]:
+    """Counts Controller.step calls: on the compiled path, the steps handed back."""
+    calls: list[int] = []
+    step = Controller.step
+
+    def counted(self: Controller, *arguments: object, **keywords: object) -> pinrate.Step:
+        calls.append(1)
+        return step(self, *arguments, **keywords)
+
+    monkeypatch.setattr(Controller, "step", counted)
+    yield calls
+
+
+def both(robot: pinrate.Robot, *arguments: object, **keywords: object) -> tuple[pinrate.Trajectory, ...]:
+    runs = []
+    for choice in ("python", "compiled"):
+        with path(choice):
+            runs.append(pinrate.servo(robot, *arguments, **keywords))
+    return tuple(runs)
+
+
+def assert_same(python: pinrate.Trajectory, compiled: pinrate.Trajectory, *, bitwise: bool) -> None:
+    assert compiled.reason == python.reason
+    assert compiled.status == python.status
+    assert compiled.detail == python.detail
+    assert compiled.q.shape == python.q.shape
+    for field in ("q", "joint_rates", "position_error", "orientation_error", "spectral_radius"):
+        ours, theirs = getattr(compiled, field), getattr(python, field)
+        if bitwise:
+            np.testing.assert_array_equal(ours, theirs, err_msg=f"{field} not bit-identical")
+        elif field == "spectral_radius":  # recorded, not fed back; an eigenvalue amplifies rounding
+            np.testing.assert_allclose(ours, theirs, rtol=1e-9, atol=1e-12, err_msg=field)
+        else:
+            np.testing.assert_allclose(ours, theirs, rtol=1e-12, atol=1e-12, err_msg=field)
+
+
+def bitwise(robot: pinrate.Robot, algorithm: str) -> bool:
+    return robot.sensor_id == robot.tip_id and algorithm in CLOSED_FORM
+
+
+@pytest.mark.parametrize("name", REFERENCE_RUNS)
+def test_the_demo_runs_and_the_papers_simulations(name: str) -> None:
+    robot = pinrate.load(str(REFERENCE[f"{name}/robot"]))
+    algorithm = str(REFERENCE[f"{name}/algorithm"])
+    settings = eval(str(REFERENCE[f"{name}/settings"]), {"inf": math.inf})  # a dict literal we wrote
+    q0, target = REFERENCE[f"{name}/q0"], REFERENCE[f"{name}/target"]
+    python, compiled = both(robot, q0, target, algorithm=algorithm, **settings)
+    assert_same(python, compiled, bitwise=bitwise(robot, algorithm))
+
+
+@pytest.mark.parametrize("algorithm", pinrate.ALGORITHMS)
+@pytest.mark.parametrize("name", ROBOTS)
+def test_random_targets_with_the_default_safety(name: str, algorithm: str, python_steps: list[int]) -> None:
+    """The URDF's velocity limits, position limits, decelerate near singularities."""
+    robot = pinrate.load(name)
+    partition = pinrate.Partition.auto(robot)
+    assert Controller(robot, algorithm=algorithm).compiled() is not None, "this robot must run compiled"
+    for seed in range(4):
+        _, target = nearby_target(robot, partition, seed, spread=0.3 + 0.3 * seed)
+        python, compiled = both(robot, robot.home(), target, algorithm=algorithm, velocity_limits=None, max_steps=600)
+        assert_same(python, compiled, bitwise=bitwise(robot, algorithm))
+
+
+def test_limits_and_singularities_hand_steps_back(python_steps: list[int]) -> None:
+    """Far targets: joints run onto their limits, rates are scaled, the arm passes near its
+    singularities; those steps go back to Python, the rest stay compiled, and the runs agree."""
+    robot = pinrate.load("ur5")
+    partition = pinrate.Partition.auto(robot)
+    words: set[str] = set()
+    handed_back = compiled_steps = 0
+    for seed in range(6):
+        _, target = nearby_target(robot, partition, seed, spread=2.5)
+        python_steps.clear()
+        with path("python"):
+            python = pinrate.servo(robot, robot.home(), target, velocity_limits=0.8, max_steps=800)
+        python_steps.clear()
+        with path("compiled"):
+            compiled = pinrate.servo(robot, robot.home(), target, velocity_limits=0.8, max_steps=800)
+        handed_back += len(python_steps)
+        compiled_steps += compiled.steps - len(python_steps)
+        assert_same(python, compiled, bitwise=True)
+        words |= set(compiled.status)
+    assert {"rate limited", "saturated"} <= words
+    assert words & {"joint limit", "decelerating", "wrist singularity", "near singularity", "singular"}
+    assert handed_back > 0 and compiled_steps > 10 * handed_back
+
+
+def test_a_run_longer_than_the_first_arrays() -> None:
+    """The log grows past its first 2048 steps on both paths alike."""
+    robot = pinrate.load("ur5")
+    _, target = nearby_target(robot, pinrate.Partition.auto(robot), 0)
+    python, compiled = both(robot, robot.home(), target, tol=1e-12, max_steps=5000, gain=0.2)
+    assert compiled.steps > 2048
+    assert_same(python, compiled, bitwise=True)
+
+
+def test_a_prismatic_and_a_continuous_joint_and_a_sensor_mid_chain() -> None:
+    robot = pinrate.load(DATA / "mixed_joints.urdf", tip="tool", sensor="link2")
+    partition = pinrate.Partition(["yaw", "slide", "roll"], ["pitch"], linear="xyz", angular="z")
+    assert Controller(robot, partition=partition).compiled() is not None
+    for seed in range(3):
+        _, target = nearby_target(robot, partition, seed)
+        python, compiled = both(robot, robot.home(), target, partition=partition, algorithm="mca1", max_steps=400)
+        assert_same(python, compiled, bitwise=False)
