@@ -134,3 +134,24 @@ def test_a_prismatic_and_a_continuous_joint_and_a_sensor_mid_chain() -> None:
         _, target = nearby_target(robot, partition, seed)
         python, compiled = both(robot, robot.home(), target, partition=partition, algorithm="mca1", max_steps=400)
         assert_same(python, compiled, bitwise=False)
+
+
+@pytest.mark.parametrize("name", ["ur5", "scara", "barker_arm", "spherical_6dof", "kinova"])
+def test_rho_maps_agree(name: str) -> None:
+    """sample_convergence: the core's float closed forms against the batched numpy closed
+    forms (the same formulas, another order of a few roundings: an ill-conditioned A or W
+    amplifies them, so ρ agrees relatively); the verdicts agree away from ρ = 1."""
+    robot = pinrate.load(name)
+    samples = {}
+    for choice in ("python", "compiled"):
+        with path(choice):
+            samples[choice] = pinrate.sample_convergence(robot, 20_000, rng=7)
+    python, compiled = samples["python"].spectral_radius, samples["compiled"].spectral_radius
+    np.testing.assert_array_equal(samples["python"].q, samples["compiled"].q)
+    np.testing.assert_array_equal(np.isinf(python), np.isinf(compiled))
+    finite = np.isfinite(python)
+    np.testing.assert_allclose(compiled[finite], python[finite], rtol=1e-9, atol=1e-12)
+    clear = np.abs(python - 1.0) > 1e-6
+    np.testing.assert_array_equal((compiled < 1.0)[clear], (python < 1.0)[clear])
+    with path("compiled"):
+        assert pinrate.backend().name == "compiled"

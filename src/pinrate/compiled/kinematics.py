@@ -11,6 +11,7 @@ import weakref
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import UnsupportedByCoreError
 from ..kinematics.manipulator import Robot
@@ -55,12 +56,24 @@ def joint_arrays(robot: Robot) -> tuple[list[str], list[int], np.ndarray, np.nda
         if kind not in REBUILT_JOINTS:
             name = model.names[joint_id]
             raise UnsupportedByCoreError(f"joint {name!r} is a {kind}, which the compiled core does not rebuild")
-        axis = np.array(joint.extract().axis, dtype=float) if kind in _UNALIGNED else np.zeros(3)
+        axis = _unaligned_axis(model, joint_id, kind) if kind in _UNALIGNED else np.zeros(3)
         kinds.append(kind)
         parents.append(int(model.parents[joint_id]))
         axes.append(axis)
         placements.append(np.array(model.jointPlacements[joint_id].homogeneous))
     return kinds, parents, np.array(axes).reshape(-1, 3), np.array(placements).reshape(-1, 4, 4)
+
+
+def _unaligned_axis(model: pin.Model, joint_id: int, kind: str) -> np.ndarray:
+    """The joint's axis as Pinocchio stores it: its motion at unit joint velocity, in its own
+    frame (pin exposes ``axis`` on some unaligned joints only; S times 1.0 is the axis to the
+    bit)."""
+    data = model.createData()
+    velocity = np.zeros(model.nv)
+    velocity[model.joints[joint_id].idx_v] = 1.0
+    pin.forwardKinematics(model, data, pin.neutral(model), velocity)
+    motion = data.v[joint_id]
+    return np.array(motion.linear if kind == "JointModelPrismaticUnaligned" else motion.angular, dtype=float)
 
 
 def core_kinematics(robot: Robot) -> Any:

@@ -401,6 +401,11 @@ class Controller:
     def compiled_reason(self) -> str | None:
         """Why this controller's loops run on Python though the core may be there (None when
         nothing in the configuration stops the core)."""
+        try:
+            if core_kinematics(self.robot) is None:
+                return backend().reason
+        except UnsupportedByCoreError as unsupported:
+            return str(unsupported)
         if self.elbow is not None:
             return "auxiliary elbow control runs on the Python path"
         if self._posture is not None:
@@ -413,11 +418,6 @@ class Controller:
             return "the compiled core takes square A and W of size 1 to 3 (rho of other blocks is the error map's)"
         if "J" in self._measured and not self._square_j:
             return f"{self.algorithm} measures J, which is not square here"
-        try:
-            if core_kinematics(self.robot) is None:
-                return backend().reason
-        except UnsupportedByCoreError as unsupported:
-            return str(unsupported)
         return None
 
     def _compiled_settings(self) -> ServoSettings:
