@@ -1,126 +1,171 @@
-"""Per-step cost of pinrate's resolved-rate solutions on UR5, against Pinocchio's floor.
+"""Per-step cost of pinrate's resolved-rate steps and servo loops on UR5, against Pinocchio's floor.
 
-Run: ``make bench`` (or ``python benchmarks/step.py [--robot ur5] [--repeats 40]``).
+Run: ``make bench`` (or ``python benchmarks/step.py [--robot ur5] [--rounds 40] [--save F]
+[--compare F]``).
 
-Every timing is the median over ``repeats`` rounds of the per-call time of a batch of
-``batch`` calls. The rounds interleave all the measured steps (round-robin, in this one
-process), so a machine that slows down or speeds up shifts every step alike and the
-ratios compare like with like.
-The floor is Pinocchio's bare ``computeFrameJacobian`` of the tip (one C++ call through
-the Python binding), the least any resolved-rate step in Python must pay.
+Every row is the median (and 95th / 99th percentile) over ``rounds`` interleaved rounds
+(:mod:`timing`) of the time per call, or per servo step for the servo rows (a run's time
+over the steps it took, set-up included). The floor is Pinocchio's bare
+``computeFrameJacobian`` of the tip through the Python binding, the least any resolved-rate
+step called from Python pays. Both paths are measured in the same process: the compiled core
+(``pinrate_core``, where it is installed) and the pure-Python path (``PINRATE_BACKEND=python``
+semantics, chosen per row with :func:`pinrate.compiled.use`).
 """
 
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
+import timing
 
 import pinrate
+from pinrate.compiled import use
 from pinrate.kinematics.targets import nearby_target
 
-
-def interleaved_medians(functions: dict[str, tuple[Callable[[], object], int]], repeats: int) -> dict[str, float]:
-    """Median seconds per call of each (function, batch size), measured round-robin."""
-    for function, batch in functions.values():  # warm caches and lazy set-up
-        for _ in range(min(batch, 20)):
-            function()
-    samples: dict[str, list[float]] = {name: [] for name in functions}
-    for _ in range(repeats):
-        for name, (function, batch) in functions.items():
-            start = time.perf_counter()
-            for _ in range(batch):
-                function()
-            samples[name].append((time.perf_counter() - start) / batch)
-    return {name: statistics.median(values) for name, values in samples.items()}
+FLOOR = "pinocchio computeFrameJacobian (floor)"
+BARE = "bare Pinocchio+numpy exact servo step"
 
 
-def measure(robot_name: str, *, batch: int, repeats: int, servo_steps: int) -> list[tuple[str, float]]:
+def on(choice: str, function: Callable[[], object]) -> Callable[[], object]:
+    """``function`` run on one path ("python" or "compiled")."""
+
+    def run() -> object:
+        use(choice)
+        try:
+            return function()
+        finally:
+            use(None)
+
+    return run
+
+
+def measure(robot_name: str, *, batch: int, rounds: int) -> tuple[list[timing.Row], dict[str, float]]:
     robot = pinrate.load(robot_name)
     partition = pinrate.Partition.auto(robot)
     q = robot.home()
     twist = np.array([0.05, -0.02, 0.03, 0.1, -0.05, 0.2])[: partition.m + partition.k]
     model, data, tip = robot.model, robot.model.createData(), robot.tip_id
     _, target = nearby_target(robot, partition, seed=0)
+    goal = pin.SE3(target)
+    compiled = pinrate.backend().name == "compiled"
+
+    def batched(function: Callable[[], object]) -> Callable[[], object]:
+        def run() -> object:
+            for _ in range(batch):
+                function()
+            return batch
+
+        return run
 
     def floor() -> object:
         return pin.computeFrameJacobian(model, data, q, tip, pin.LOCAL)
 
-    def step(algorithm: str) -> Callable[[], object]:
-        return lambda: pinrate.joint_rates(robot, q, twist, algorithm=algorithm, partition=partition)
-
-    goal = pin.SE3(target)
-    rows_index = partition.resolve(robot)
-
     def bare_servo_step() -> object:
-        """The least a servo step can be: Pinocchio kinematics, log3, one solve, integrate."""
+        """The least a servo step can be in Python: Pinocchio kinematics, log3, one solve, integrate."""
         pin.computeJointJacobians(model, data, q)
         jacobian = pin.getFrameJacobian(model, data, tip, pin.LOCAL)
         error = pin.updateFramePlacement(model, data, tip).actInv(goal)
         twist = np.concatenate([error.translation, pin.log3(error.rotation)])
         return pin.integrate(model, q, np.linalg.solve(jacobian, twist) * 0.01)
 
-    def servo_step() -> object:
-        return pinrate.servo(robot, q, target, partition=partition, max_steps=servo_steps, tol=1e-12)
+    def servo(algorithm: str, steps: int) -> Callable[[], object]:
+        def run() -> int:
+            trajectory = pinrate.servo(
+                robot, q, target, partition=partition, algorithm=algorithm, max_steps=steps, tol=1e-12
+            )
+            return trajectory.steps
+
+        return run
 
     functions: dict[str, tuple[Callable[[], object], int]] = {
-        "pinocchio computeFrameJacobian (floor)": (floor, batch),
-        "pinrate sensor-frame Jacobian": (lambda: robot.jacobian(q), batch),
+        FLOOR: (batched(floor), batch),
+        "pinrate sensor-frame Jacobian": (batched(lambda: robot.jacobian(q)), batch),
     }
     for algorithm in ("exact", "mca1", "mca2", "mca3", "schur", "dls"):
-        functions[f"pinrate {algorithm} step"] = (step(algorithm), batch)
+        step = batched(
+            lambda algorithm=algorithm: pinrate.joint_rates(robot, q, twist, algorithm=algorithm, partition=partition)
+        )
+        functions[f"pinrate {algorithm} step"] = (step, batch)
     controller = pinrate.Controller(robot, partition=partition)  # default safety: limits, decelerate
-    functions["controller step, default safety (exact)"] = (lambda: controller.step(q, twist), batch)
-    guarded = pinrate.Controller(robot, partition=partition, collision=True)  # + the self-collision monitor
-    functions["controller step, self-collision (exact)"] = (lambda: guarded.step(q, twist), batch)
-    functions["bare Pinocchio+numpy exact servo step"] = (bare_servo_step, batch)
-    functions["pinrate full servo step (mca1)"] = (servo_step, 1)  # one run, divided below
-    medians = interleaved_medians(functions, repeats)
-    medians["pinrate full servo step (mca1)"] /= servo_steps
-    assert rows_index.all_rows  # the bare step assumes the full 6 x nv Jacobian
-    return list(medians.items())
+    functions["controller step, default safety (exact)"] = (batched(lambda: controller.step(q, twist)), batch)
+    guarded = pinrate.Controller(robot, partition=partition, collision=True)
+    functions["controller step, self-collision (exact)"] = (batched(lambda: guarded.step(q, twist)), batch)
+    functions[BARE] = (batched(bare_servo_step), batch)
+    functions["servo step, python, mca1, 300-step run"] = (on("python", servo("mca1", 300)), 300)
+    functions["servo step, python, exact, 300-step run"] = (on("python", servo("exact", 300)), 300)
+    if compiled:
+        functions["servo step, compiled, mca1, 2000-step run"] = (on("compiled", servo("mca1", 2000)), 2000)
+        functions["servo step, compiled, mca1, 300-step run"] = (on("compiled", servo("mca1", 300)), 300)
+        functions["servo step, compiled, exact, 2000-step run"] = (on("compiled", servo("exact", 2000)), 2000)
+    rows = timing.interleaved(functions, rounds)
+    solves: dict[str, float] = {}
+    if compiled:  # the solve alone, timed in C++ (a Python call would cost more than the solve)
+        core = pinrate.Controller(robot, partition=partition, algorithm="mca1").compiled()
+        assert core is not None
+        for algorithm in ("exact", "mca1", "mca2"):
+            solves[algorithm] = min(core.solve_seconds(q, twist, algorithm, 200_000) for _ in range(5))
+    return rows, solves
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot", default="ur5")
-    parser.add_argument("--batch", type=int, default=200)
-    parser.add_argument("--repeats", type=int, default=40)
-    parser.add_argument("--servo-steps", type=int, default=300)
+    parser.add_argument("--batch", type=int, default=100)
+    parser.add_argument("--rounds", type=int, default=30)
+    timing.add_arguments(parser)
     args = parser.parse_args()
-    rows = measure(args.robot, batch=args.batch, repeats=args.repeats, servo_steps=args.servo_steps)
-    timings = dict(rows)
-    floor = timings["pinocchio computeFrameJacobian (floor)"]
-    exact = timings["pinrate exact step"]
-    print(f"{args.robot}: median per call, {args.repeats} batches of {args.batch}\n")
-    print(f"| {'step':<40} | {'time (us)':>9} | {'x floor':>7} | {'x exact':>7} |")
-    print(f"|{'-' * 42}|{'-' * 11}|{'-' * 9}|{'-' * 9}|")
-    for name, seconds in rows:
-        print(f"| {name:<40} | {seconds * 1e6:9.2f} | {seconds / floor:7.2f} | {seconds / exact:7.2f} |")
+    print(f"backend: {pinrate.backend()}")
+    rows, solves = measure(args.robot, batch=args.batch, rounds=args.rounds)
+    by_name = {row.name: row.median for row in rows}
+    floor = by_name[FLOOR]
+    print(f"{args.robot}: per call (servo rows: per step), {args.rounds} interleaved rounds\n")
+    print(f"| {'row':<44} | {'median (us)':>11} | {'p95':>8} | {'p99':>8} | {'x floor':>7} |")
+    print(f"|{'-' * 46}|{'-' * 13}|{'-' * 10}|{'-' * 10}|{'-' * 9}|")
+    for row in rows:
+        print(
+            f"| {row.name:<44} | {row.median * 1e6:11.3f} | {row.p95 * 1e6:8.3f} | {row.p99 * 1e6:8.3f} "
+            f"| {row.median / floor:7.2f} |"
+        )
+    if solves:
+        print("\nthe solve alone, in C++ (best of 5 x 200,000):")
+        for algorithm, seconds in solves.items():
+            print(f"  {algorithm:<6} {seconds * 1e9:8.1f} ns  ({seconds / solves['exact']:.2f} x exact)")
     print()
-    servo_ratio = timings["pinrate full servo step (mca1)"] / floor
-    mca1_ratio = timings["pinrate mca1 step"] / exact
+    if "servo step, compiled, mca1, 2000-step run" in by_name:
+        print(
+            timing.verdict(
+                "compiled servo step, 2000-step run", by_name["servo step, compiled, mca1, 2000-step run"] / floor, 1.5
+            )
+        )
+        print(
+            timing.verdict(
+                "compiled servo step, 300-step run", by_name["servo step, compiled, mca1, 300-step run"] / floor, 2.0
+            )
+        )
+        print(timing.verdict("compiled mca1 solve / exact solve", solves["mca1"] / solves["exact"], 0.8))
+        mca1, exact = (by_name[f"servo step, compiled, {name}, 2000-step run"] for name in ("mca1", "exact"))
+        whole = mca1 / exact
+        print(f"(compiled servo step mca1 / exact, whole steps: {whole:.2f})")
+    else:
+        print("(the compiled core is not installed: its rows are left out; make core builds it)")
+    python_servo = by_name["servo step, python, exact, 300-step run"]
+    print(timing.verdict("python servo step (exact) / bare Pinocchio+numpy step", python_servo / by_name[BARE], 1.0))
     print(
-        f"target: full servo step <= 3x floor      measured {servo_ratio:.2f}x  "
-        f"{'met' if servo_ratio <= 3 else 'NOT met'}"
+        timing.verdict(
+            "python mca1 step / exact step", by_name["pinrate mca1 step"] / by_name["pinrate exact step"], 0.8
+        )
     )
+    default = by_name["controller step, default safety (exact)"]
     print(
-        f"target: mca1 step <= 0.8x exact step     measured {mca1_ratio:.2f}x  "
-        f"{'met' if mca1_ratio <= 0.8 else 'NOT met'}"
+        f"(the default controller step costs {default / floor:.1f}x floor; with self-collision "
+        f"{by_name['controller step, self-collision (exact)'] / floor:.1f}x)"
     )
-    default = timings["controller step, default safety (exact)"] / timings["pinrate full servo step (mca1)"]
-    print(
-        f"target: default controller step <= full servo step  measured {default:.2f}x  "
-        f"{'met' if default <= 1 else 'NOT met'}"
+    timing.finish(
+        rows, args, {"robot": args.robot, "batch": args.batch, "rounds": args.rounds, "backend": str(pinrate.backend())}
     )
-    collision = timings["controller step, self-collision (exact)"] / timings["pinrate full servo step (mca1)"]
-    print(f"(the step with self-collision on costs {collision:.2f}x the full servo step)")
-    bare = timings["bare Pinocchio+numpy exact servo step"] / floor
-    print(f"(a servo step's bare Pinocchio+numpy calls alone cost {bare:.2f}x floor)")
 
 
 if __name__ == "__main__":

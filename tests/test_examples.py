@@ -24,7 +24,7 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 @pytest.mark.parametrize(
     ("script", "arguments"),
     [
-        ("step.py", ["--repeats", "2", "--batch", "5", "--servo-steps", "5"]),
+        ("step.py", ["--rounds", "2", "--batch", "5"]),
         ("work_volume.py", ["--samples", "300", "--naive-samples", "20", "--repeats", "1"]),
     ],
 )

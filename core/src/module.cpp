@@ -50,8 +50,14 @@ Servo *make_servo(Kinematics &kinematics, const std::vector<int> &rows, const st
                   double slow_threshold, bool watch, double watch_factor, double watched_step,
                   double max_linear_speed, double max_angular_speed, double dt, bool position_limits,
                   Array<const double> limits, Array<const double> rate_limits, double exact_rcond,
-                  double dls_damping) {
+                  double dls_damping, bool small, const std::vector<int> &ranks, double pinv_rcond) {
   Settings s;
+  s.small = small;
+  if (ranks.size() != 3) throw std::invalid_argument("ranks must be (J, A, W)");
+  s.rank_j = ranks[0];
+  s.rank_a = ranks[1];
+  s.rank_w = ranks[2];
+  s.pinv_rcond = pinv_rcond;
   s.rows = rows;
   s.columns = columns;
   s.m = m;
@@ -87,8 +93,10 @@ Servo *make_servo(Kinematics &kinematics, const std::vector<int> &rows, const st
     if (index < 0 || index >= 6) throw std::invalid_argument("row index out of range");
   for (int index : columns)
     if (index < 0 || index >= kinematics.nv()) throw std::invalid_argument("column index out of range");
-  if (m < 0 || m > 3 || n_rows - m > 3 || n_arm < 0 || n_arm > 3 || static_cast<int>(columns.size()) - n_arm > 3)
-    throw std::invalid_argument("the compiled servo takes blocks of at most 3x3");
+  if (small && (m < 0 || m > 3 || n_rows - m > 3 || n_arm < 0 || n_arm > 3 || static_cast<int>(columns.size()) - n_arm > 3))
+    throw std::invalid_argument("the closed forms take blocks of at most 3x3");
+  if (m < 0 || m > n_rows || n_arm < 0 || n_arm > static_cast<int>(columns.size()))
+    throw std::invalid_argument("m or n_arm out of range");
   return new Servo(kinematics, std::move(s));
 }
 
@@ -111,12 +119,18 @@ nb::tuple run_servo(Servo &servo, Array<const double> q0, Array<const double> ta
                capacity};
   ServoState state{step_number, best, progress, progress_step};
   const Eigen::Map<const Vector> start(q0.data(), nq);
+  // Ctrl-C reaches a long run: every few thousand steps the loop takes the GIL and asks.
+  const auto interrupted = []() {
+    nb::gil_scoped_acquire gil;
+    return PyErr_CheckSignals() != 0;
+  };
   int outcome;
   {
     nb::gil_scoped_release release;
     outcome = servo.run(start, se3_from(target.data()), gain, tol, stall_steps, max_steps, divergence_factor,
-                        stall_improvement, state, log);
+                        stall_improvement, state, log, interrupted);
   }
+  if (outcome == INTERRUPTED) throw nb::python_error();  // the signal handler's exception
   return nb::make_tuple(outcome, state.step_number, state.best, state.progress, state.progress_step);
 }
 
@@ -132,7 +146,7 @@ void spectral_radius_at(Servo &servo, Array<const double> configurations,
   nb::gil_scoped_release release;
   for (std::size_t i = 0; i < count; ++i) {
     kinematics.compute_jacobian(Eigen::Map<const Vector>(source + i * nq, nq));
-    out[i] = Servo::radius_of(servo.blocks());
+    out[i] = servo.radius_here();
   }
 }
 
@@ -173,6 +187,8 @@ double solve_timing(Servo &servo, Array<const double> q, Array<const double> twi
 
 NB_MODULE(pinrate_core, module) {
   module.doc() = "pinrate's compiled core: whole servo loops and rho maps on header-only Pinocchio";
+  // pinrate keeps a Kinematics per Robot until exit; that is no leak worth a warning.
+  nb::set_leak_warnings(false);
   module.attr("PINOCCHIO_VERSION") = PINOCCHIO_VERSION;
   module.attr("ABI") = 1;  // bumped when pinrate.compiled must change with it
 
@@ -208,11 +224,11 @@ NB_MODULE(pinrate_core, module) {
               const std::vector<double> &row_scale, double slow_threshold, bool watch, double watch_factor,
               double watched_step, double max_linear_speed, double max_angular_speed, double dt,
               bool position_limits, Array<const double> limits, Array<const double> rate_limits, double exact_rcond,
-              double dls_damping) {
+              double dls_damping, bool small, const std::vector<int> &ranks, double pinv_rcond) {
              Servo *made = make_servo(kinematics, rows, columns, m, n_arm, kernel, measured, row_scale,
                                       slow_threshold, watch, watch_factor, watched_step, max_linear_speed,
                                       max_angular_speed, dt, position_limits, limits, rate_limits, exact_rcond,
-                                      dls_damping);
+                                      dls_damping, small, ranks, pinv_rcond);
              new (self) Servo(std::move(*made));
              delete made;
            },

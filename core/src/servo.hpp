@@ -11,9 +11,11 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include "closed_form.hpp"
+#include "general.hpp"
 #include "kinematics.hpp"
 
 namespace pinrate_core {
@@ -21,7 +23,10 @@ namespace pinrate_core {
 enum Kernel { EXACT = 0, SCHUR = 1, MCA1 = 2, MCA2 = 3, MCA3 = 4, DLS = 5 };
 
 // What ended a run of the loop.
-enum Outcome { CONVERGED = 0, DIVERGING = 1, STALLED = 2, MAX_STEPS = 3, HANDBACK = 4, FULL = 5 };
+enum Outcome { CONVERGED = 0, DIVERGING = 1, STALLED = 2, MAX_STEPS = 3, HANDBACK = 4, FULL = 5, INTERRUPTED = 6 };
+
+// Steps between two looks at the caller's signals (Ctrl-C): about 5 ms of loop.
+constexpr long kSignalCheckSteps = 4096;
 
 // Flags of a step taken here (pinrate.control.Status members met).
 enum StepFlag { SATURATED = 1, RATE_LIMITED_FLAG = 2, CLAMPED = 4 };
@@ -51,6 +56,9 @@ struct Settings {
   std::vector<Limit> limits;
   std::vector<RateLimit> rate_limits;
   double exact_rcond = 1e-12, dls_damping = 1e-2;
+  bool small = true;  // A and W square of size <= 3: the closed forms; else general.hpp
+  int rank_a = 3, rank_w = 3, rank_j = 6;  // generic ranks: c is sigma_rank / sigma_1
+  double pinv_rcond = 1e-10;
 };
 
 struct Blocks {
@@ -112,22 +120,27 @@ class Servo {
 
   // The loop from state.step_number; returns an Outcome.
   int run(Eigen::Ref<const Vector> q0, const SE3 &target, double gain, double tol, long stall_steps, long max_steps,
-          double divergence_factor, double stall_improvement, ServoState &state, ServoLog &log) {
+          double divergence_factor, double stall_improvement, ServoState &state, ServoLog &log,
+          const std::function<bool()> &interrupted) {
     const int nq = kin_.nq(), nv = kin_.nv();
     Vector q = q0;
+    const long first = state.step_number;
     for (;; ++state.step_number) {
       const long step = state.step_number;
       if (step > log.capacity) return FULL;
+      if (step > first && (step - first) % kSignalCheckSteps == 0 && interrupted()) return INTERRUPTED;
       kin_.compute(q);
       const Eigen::Matrix<double, 6, 1> full_error = kin_.pose_error(target);
       double error[6];
       for (int r = 0; r < s_.m + k_; ++r) error[r] = full_error[s_.rows[r]];
       const double position = std::sqrt(dot(error, error, s_.m));
       const double orientation = std::sqrt(dot(error + s_.m, error + s_.m, k_));
-      const Blocks parts = blocks();
+      const Blocks parts = s_.small ? blocks() : Blocks{};
+      const bool need_reduced = !s_.small || s_.measure_j;
+      Matrix R = need_reduced ? reduced() : Matrix();
       log.position[step] = position;
       log.orientation[step] = orientation;
-      log.radius[step] = radius_of(parts);
+      log.radius[step] = s_.small ? radius_of(parts) : general_radius(R);
       const double total = position + orientation;
       if (position < tol && orientation < tol) return CONVERGED;
       state.best = py_min(state.best, total);
@@ -145,10 +158,15 @@ class Servo {
       int flags = 0;
       if (saturate(twist, s_.m, s_.max_linear_speed)) flags |= SATURATED;
       if (saturate(twist + s_.m, k_, s_.max_angular_speed)) flags |= SATURATED;
-      const double bound = conditioning_bound(parts);
-      if (bound < s_.slow_threshold) return HANDBACK;  // the singular region: a plan
+      const double bound = conditioning_bound(parts, R);
+      // Under the cheap bound, the SVDs decide (Controller._plan): in the singular region a
+      // plan, which Python makes; above it after all, the algorithm as it is.
+      if (bound < s_.slow_threshold) {
+        if (!need_reduced) R = reduced();
+        if (conditioning(R) < s_.slow_threshold) return HANDBACK;
+      }
       Vector rates = Vector::Zero(nv);
-      if (!solve(parts, twist, rates)) return HANDBACK;
+      if (!(s_.small ? solve(parts, twist, rates) : solve_general(R, twist, rates))) return HANDBACK;
       if (s_.position_limits && passing(q, rates)) return HANDBACK;
       if (s_.watch && !(bound >= s_.watch_factor * s_.slow_threshold || max_abs(rates) * s_.dt <= s_.watched_step))
         return HANDBACK;  // decelerate judges this step one step ahead
@@ -171,6 +189,9 @@ class Servo {
   }
 
   int n() const { return n_; }
+
+  // rho at the configuration of the last kinematics pass.
+  double radius_here() const { return s_.small ? radius_of(blocks()) : general_radius(reduced()); }
   Kinematics &kinematics() const { return kin_; }
 
  private:
@@ -203,10 +224,10 @@ class Servo {
   }
 
   // Controller._conditioning_bound: the least 1 / (||M||_F ||M^-1||_F) of the measured blocks.
-  double conditioning_bound(const Blocks &b) const {
+  double conditioning_bound(const Blocks &b, const Matrix &R) const {
     double bound = INFINITY;
     if (s_.measure_j) {
-      Eigen::MatrixXd scaled = reduced();
+      Eigen::MatrixXd scaled = R;
       for (int r = 0; r < scaled.rows(); ++r) scaled.row(r) *= s_.row_scale[r];
       if (scaled.rows() != scaled.cols()) return 0.0;
       Eigen::PartialPivLU<Eigen::MatrixXd> lu(scaled);
@@ -216,6 +237,7 @@ class Servo {
       if (!(product > 0.0) || !std::isfinite(product)) return 0.0;
       bound = py_min(bound, 1.0 / std::sqrt(product));
     }
+    if (!s_.small && (s_.measure_a || s_.measure_w)) return 0.0;  // no closed-form inverse to bound with
     try {
       if (s_.measure_a && b.A.rows && b.A.cols) bound = py_min(bound, inverse_condition_bound(b.A, inverse(b.A, "A")));
       if (s_.measure_w && b.W.rows && b.W.cols) bound = py_min(bound, inverse_condition_bound(b.W, inverse(b.W, "W")));
@@ -234,11 +256,15 @@ class Servo {
       for (int r = 0; r < s_.m + k_; ++r) command[r] = twist[r];
       Eigen::VectorXd solved;
       if (s_.kernel == EXACT) {
-        if (J.rows() != J.cols() || J.rows() == 0) return false;
-        solved = J.partialPivLu().solve(command);
-        // reference.exact: a solution this large betrays a singular J (least squares instead).
-        const double growth = J.squaredNorm() * solved.squaredNorm() * (s_.exact_rcond * s_.exact_rcond);
-        if (!(growth <= command.squaredNorm())) return false;
+        // reference.exact: one solve where J is square, unless the solution is so large that
+        // it betrays a singular J; else (and for a J not square) the least-squares J^+ s.
+        bool solved_square = false;
+        if (J.rows() == J.cols() && J.rows() > 0) {
+          solved = J.partialPivLu().solve(command);
+          const double growth = J.squaredNorm() * solved.squaredNorm() * (s_.exact_rcond * s_.exact_rcond);
+          solved_square = growth <= command.squaredNorm();
+        }
+        if (!solved_square) solved = J.size() ? Eigen::VectorXd(pinv(J, s_.pinv_rcond) * command) : Eigen::VectorXd::Zero(n_);
       } else {
         Eigen::MatrixXd normal = J * J.transpose();
         normal.diagonal().array() += s_.dls_damping * s_.dls_damping;
@@ -260,6 +286,56 @@ class Servo {
         case MCA2: solved = mca2(b.A, b.B, b.U, b.W, v, omega); break;
         default: solved = mca3(b.A, b.B, b.U, b.W, v, omega); break;
       }
+    } catch (const Singular &) {
+      return false;
+    }
+    for (int c = 0; c < s_.n_arm; ++c) rates[s_.columns[c]] = solved.arm[c];
+    for (int c = s_.n_arm; c < n_; ++c) rates[s_.columns[c]] = solved.wrist[c - s_.n_arm];
+    return true;
+  }
+
+  // singularity.conditioning: the least sigma_r / sigma_1 of the measured blocks (J's rows
+  // scaled), r capped at each block's generic rank; 1 when none is measured.
+  double conditioning(const Matrix &R) const {
+    double worst = 1.0;
+    const int n_wrist = n_ - s_.n_arm;
+    auto consider = [&](const Matrix &M, int cap) {
+      if (M.size() == 0) return;
+      const int rank = std::min(static_cast<int>(std::min(M.rows(), M.cols())), cap);
+      if (rank == 0) return;
+      worst = std::fmin(worst, inverse_condition(M, rank));
+    };
+    if (s_.measure_a) consider(R.topLeftCorner(s_.m, s_.n_arm), s_.rank_a);
+    if (s_.measure_w) consider(R.bottomRightCorner(k_, n_wrist), s_.rank_w);
+    if (s_.measure_j) {
+      Matrix scaled = R;
+      for (int r = 0; r < scaled.rows(); ++r) scaled.row(r) *= s_.row_scale[r];
+      consider(scaled, s_.rank_j);
+    }
+    return worst;
+  }
+
+  double general_radius(const Matrix &R) const {
+    const int n_wrist = n_ - s_.n_arm;
+    return general_spectral_radius(R.topLeftCorner(s_.m, s_.n_arm), R.topRightCorner(s_.m, n_wrist),
+                                   R.bottomLeftCorner(k_, s_.n_arm), R.bottomRightCorner(k_, n_wrist), s_.pinv_rcond);
+  }
+
+  // solvers.rates.partition_rates for blocks of any shape (reference kernels).
+  bool solve_general(const Matrix &R, const double *twist, Vector &rates) const {
+    if (s_.kernel == EXACT || s_.kernel == DLS) {
+      Blocks none;
+      return solve(none, twist, rates);
+    }
+    const int n_wrist = n_ - s_.n_arm;
+    Eigen::VectorXd v(s_.m), omega(k_);
+    for (int r = 0; r < s_.m; ++r) v[r] = twist[r];
+    for (int r = 0; r < k_; ++r) omega[r] = twist[s_.m + r];
+    GeneralRates solved;
+    try {
+      solved = general_kernel(s_.kernel, R.topLeftCorner(s_.m, s_.n_arm), R.topRightCorner(s_.m, n_wrist),
+                              R.bottomLeftCorner(k_, s_.n_arm), R.bottomRightCorner(k_, n_wrist), v, omega,
+                              s_.pinv_rcond);
     } catch (const Singular &) {
       return false;
     }

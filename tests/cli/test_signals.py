@@ -52,7 +52,7 @@ def test_ctrl_c_at_any_moment_exits_130_without_a_traceback(inherited: str, dela
     # From the entry point on: importing Pinocchio and matplotlib (about a second), loading,
     # the servo runs; 40 targets take far longer than the longest delay.
     process = start(
-        ["demo", "ur5", "--no-viewer", "--targets", "40"], ignore_sigint if inherited == "ignored" else None
+        ["demo", "ur5", "--no-viewer", "--targets", "1000"], ignore_sigint if inherited == "ignored" else None
     )
     time.sleep(delay)
     process.send_signal(signal.SIGINT)
@@ -65,7 +65,7 @@ def test_ctrl_c_at_any_moment_exits_130_without_a_traceback(inherited: str, dela
 
 @pytest.mark.parametrize("delay", [0.0, 0.1, 0.3, 0.5, 1.2])
 def test_sigterm_ends_the_run_and_says_so(delay: float) -> None:
-    process = start(["demo", "ur5", "--no-viewer", "--targets", "40"])
+    process = start(["demo", "ur5", "--no-viewer", "--targets", "1000"])
     time.sleep(delay)
     process.terminate()
     _, err = process.communicate(timeout=30)

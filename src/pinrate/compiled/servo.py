@@ -12,6 +12,8 @@ import numpy as np
 
 from ..errors import UnsupportedByCoreError
 from ..kinematics.manipulator import Robot
+from ..kinematics.partition import pseudo_g_is_exact, square_and_small
+from ..solvers.singular import PINV_RCOND
 from .core import core_module
 from .kinematics import core_kinematics
 
@@ -38,6 +40,10 @@ class ServoSettings:
         limits: (L, 4) rows of q index, v index, lower, upper (rad or m).
         rate_limits: (R, 2) rows of v index, limit (rad/s or m/s).
         exact_rcond, dls_damping: :mod:`pinrate.solvers.reference`'s constants.
+        small: A and W square of size <= 3 (the closed forms); else pseudo-inverses, which
+            needs A not tall and W not wide (ρ of the pseudo-inverse G is then the error map's).
+        ranks: the generic ranks of J, A and W (c is σ_rank / σ_1).
+        pinv_rcond: the pseudo-inverses' relative cut-off.
     """
 
     rows: tuple[int, ...]
@@ -59,6 +65,9 @@ class ServoSettings:
     rate_limits: np.ndarray
     exact_rcond: float
     dls_damping: float
+    small: bool = True
+    ranks: tuple[int, int, int] = (6, 3, 3)
+    pinv_rcond: float = PINV_RCOND
 
 
 class CoreServo:
@@ -70,8 +79,8 @@ class CoreServo:
         core = core_module()
         if kinematics is None or core is None:
             raise UnsupportedByCoreError("the Python path is chosen")
-        if len(settings.rows) - settings.m > 3 or settings.m > 3 or settings.n_arm > 3:
-            raise UnsupportedByCoreError("the compiled core takes blocks of at most 3x3")
+        if settings.small and (len(settings.rows) - settings.m > 3 or settings.m > 3 or settings.n_arm > 3):
+            raise UnsupportedByCoreError("the closed forms take blocks of at most 3x3")
         self.core = core
         self.robot = robot
         self.settings = settings
@@ -96,6 +105,9 @@ class CoreServo:
             np.ascontiguousarray(settings.rate_limits, dtype=float).reshape(-1, 2),
             settings.exact_rcond,
             settings.dls_damping,
+            settings.small,
+            list(settings.ranks),
+            settings.pinv_rcond,
         )
 
     def run(self, q: np.ndarray, target: np.ndarray, *arguments: Any) -> tuple[int, int, float, float, int]:
@@ -122,9 +134,7 @@ def rho_map(robot: Robot, rows: tuple[int, ...], columns: tuple[int, ...], m: in
     and partition), or None where the Python path is chosen or the core does not cover it
     (a joint it does not rebuild; blocks that are not square of size 1 to 3)."""
     k, n_wrist = len(rows) - m, len(columns) - n_arm
-    if core_module() is None:
-        return None
-    if not (m == n_arm and k == n_wrist and 1 <= m <= 3 and 1 <= k <= 3):
+    if core_module() is None or not pseudo_g_is_exact(m, n_arm, k, n_wrist):
         return None
     key = (rows, columns, m, n_arm)
     maps = _maps.setdefault(robot, {})
@@ -149,6 +159,7 @@ def rho_map(robot: Robot, rows: tuple[int, ...], columns: tuple[int, ...], m: in
             rate_limits=np.zeros((0, 2)),
             exact_rcond=0.0,
             dls_damping=0.0,
+            small=square_and_small(m, n_arm, k, n_wrist),
         )
         try:
             maps[key] = CoreServo(robot, settings)

@@ -414,10 +414,8 @@ class Controller:
             return "acceleration limits run on the Python path"
         if self.collision is not None:
             return "the collision monitor runs on the Python path"
-        if not self.index.small:
-            return "the compiled core takes square A and W of size 1 to 3 (rho of other blocks is the error map's)"
-        if "J" in self._measured and not self._square_j:
-            return f"{self.algorithm} measures J, which is not square here"
+        if not self.index.small and not self.index.pseudo_g:
+            return "a tall A or a wide W (rho is then the error map's) runs on the Python path"
         return None
 
     def _compiled_settings(self) -> ServoSettings:
@@ -442,6 +440,8 @@ class Controller:
             rate_limits=np.array(self._rate_limit_rows),
             exact_rcond=EXACT_RCOND,
             dls_damping=DLS_DAMPING,
+            small=index.small,
+            ranks=(self._ranks["J"], self._ranks["A"], self._ranks["W"]),
         )
 
     def position_limit(self, number: int) -> _Limit:
