@@ -123,7 +123,8 @@ class Servo {
           double divergence_factor, double stall_improvement, ServoState &state, ServoLog &log,
           const std::function<bool()> &interrupted) {
     const int nq = kin_.nq(), nv = kin_.nv();
-    Vector q = q0;
+    // The step's vectors live across steps: the loop allocates nothing per step.
+    Vector q = q0, next(nq), rates(nv), displacement(nv);
     const long first = state.step_number;
     for (;; ++state.step_number) {
       const long step = state.step_number;
@@ -165,17 +166,18 @@ class Servo {
         if (!need_reduced) R = reduced();
         if (conditioning(R) < s_.slow_threshold) return HANDBACK;
       }
-      Vector rates = Vector::Zero(nv);
+      rates.setZero();
       if (!(s_.small ? solve(parts, twist, rates) : solve_general(R, twist, rates))) return HANDBACK;
       if (s_.position_limits && passing(q, rates)) return HANDBACK;
       if (s_.watch && !(bound >= s_.watch_factor * s_.slow_threshold || max_abs(rates) * s_.dt <= s_.watched_step))
         return HANDBACK;  // decelerate judges this step one step ahead
       const double scale = rate_scale(rates);
       if (scale < 1.0) {
-        rates = rates * scale;
+        rates *= scale;
         flags |= RATE_LIMITED_FLAG;
       }
-      Vector next = kin_.integrate(q, rates * s_.dt);
+      displacement = rates * s_.dt;
+      pinocchio::integrate(kin_.model, q, displacement, next);
       int hit = -1;
       if (s_.position_limits) hit = clamp(next);
       if (hit >= 0) flags |= CLAMPED;
@@ -184,7 +186,7 @@ class Servo {
       log.hit[step] = hit;
       std::copy(rates.data(), rates.data() + nv, log.rates + step * nv);
       std::copy(next.data(), next.data() + nq, log.q + (step + 1) * nq);
-      q = next;
+      q.swap(next);
     }
   }
 
