@@ -112,14 +112,40 @@ class Observation:
     goal: PoseGoal | None = None
     error: np.ndarray | None = None
     _spectral_radius: float | None = None
+    _inverses: dict[str, closed_form.Matrix | SingularBlockError] | None = None
 
     @property
     def spectral_radius(self) -> float:
         """ρ of the smaller of G and H (eq. 32, 50; inf where A or W is singular), computed on
         first use: a control step that does not report it does not pay for it."""
         if self._spectral_radius is None:
-            self._spectral_radius = partition_spectral_radius(self.jacobian, self.index, self.blocks, self.algorithm)
+            inverses = None
+            if self.blocks is not None:
+                try:
+                    inverses = (self.block_inverse("A"), self.block_inverse("W"))
+                except SingularBlockError:
+                    self._spectral_radius = math.inf
+                    return self._spectral_radius
+            self._spectral_radius = partition_spectral_radius(
+                self.jacobian, self.index, self.blocks, self.algorithm, inverses
+            )
         return self._spectral_radius
+
+    def block_inverse(self, name: str) -> closed_form.Matrix:
+        """A^-1 or W^-1 (``name`` "A" or "W") in closed form, computed once for ρ and the
+        conditioning bound alike (``blocks`` must be set). Raises SingularBlockError."""
+        if self._inverses is None:
+            self._inverses = {}
+        if name not in self._inverses:
+            assert self.blocks is not None
+            try:
+                self._inverses[name] = closed_form.inverse(self.blocks[0 if name == "A" else 3], name)
+            except SingularBlockError as singular:
+                self._inverses[name] = singular
+        inverse = self._inverses[name]
+        if isinstance(inverse, SingularBlockError):
+            raise inverse
+        return inverse
 
 
 @dataclass(slots=True)  # a record, read-only by convention
@@ -622,7 +648,7 @@ class Controller:
             if not block or not block[0]:
                 continue
             try:
-                bound = min(bound, inverse_condition_bound(block, closed_form.inverse(block, name)))
+                bound = min(bound, inverse_condition_bound(block, observation.block_inverse(name)))
             except SingularBlockError:
                 return 0.0
         return bound

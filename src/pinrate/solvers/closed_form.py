@@ -181,14 +181,16 @@ def _matmul(X: Matrix, Y: Matrix) -> Matrix:
     return [[_dot(row, column) for column in columns] for row in X]
 
 
-def spectral_radius(parts: Blocks) -> float:
-    """ρ of the smaller of G = U A^-1 B W^-1 and H = B W^-1 U A^-1 (eq. 32, 50).
+def spectral_radius(parts: Blocks, inverses: tuple[Matrix, Matrix] | None = None) -> float:
+    """ρ of the smaller of G = U A^-1 B W^-1 and H = B W^-1 U A^-1 (eq. 32, 50); ``inverses``
+    are (A^-1, W^-1) when already at hand.
 
     Raises SingularBlockError when A or W is singular.
     """
-    A, B, U, W = parts
-    P = _matmul(U, inverse(A, "A"))  # k x m
-    Q = _matmul(B, inverse(W, "W"))  # m x k
+    A_inv, W_inv = (inverse(parts[0], "A"), inverse(parts[3], "W")) if inverses is None else inverses
+    _, B, U, _ = parts
+    P = _matmul(U, A_inv)  # k x m
+    Q = _matmul(B, W_inv)  # m x k
     M = _matmul(P, Q) if len(P) <= len(Q) else _matmul(Q, P)
     n = len(M)
     if n == 3:

@@ -55,16 +55,21 @@ def partition_rates(
 
 
 def partition_spectral_radius(
-    J: np.ndarray, index: PartitionIndex, parts: closed_form.Blocks | None = None, algorithm: str = "mca1"
+    J: np.ndarray,
+    index: PartitionIndex,
+    parts: closed_form.Blocks | None = None,
+    algorithm: str = "mca1",
+    inverses: tuple[closed_form.Matrix, closed_form.Matrix] | None = None,
 ) -> float:
     """ρ of the smaller of G and H (eq. 32, 50) from a sensor-frame Jacobian (6, nv); inf
-    where A or W is singular. Closed form on ``parts`` when given (square blocks <= 3).
+    where A or W is singular. Closed form on ``parts`` when given (square blocks <= 3), with
+    their ``inverses`` (A^-1, W^-1) when at hand.
     Where A is tall or W wide, ρ of the error map of ``algorithm`` (an MCA; MCA1 for the
     others), :mod:`pinrate.solvers.error_map`; a wide A or a tall W keeps the pseudo-inverse G,
     whose spectrum is the map's."""
     try:
         if parts is not None:
-            return closed_form.spectral_radius(parts)
+            return closed_form.spectral_radius(parts, inverses)
         reduced = J[np.ix_(index.rows, index.columns)]
         arm = index.arm_columns.size
         if index.pseudo_g:
