@@ -22,16 +22,21 @@ $(VENV)/.core: $(VENV)/.installed core/pyproject.toml core/CMakeLists.txt $(wild
 	@if [ "$(PINRATE_CORE)" = 0 ]; then \
 		$(BIN)/python -m pip uninstall --quiet --yes pinrate-core 2>/dev/null; \
 		echo "pinrate: the compiled core is off (PINRATE_CORE=0): the pure-Python path runs"; \
-	elif $(BIN)/python -m pip install --quiet $(CORE_BUILD_DEPS) && \
-		$(BIN)/python -m pip install --quiet --no-build-isolation ./core; then \
+		echo 0 > $@; \
+	elif echo "pinrate: building the compiled core (about 90 s, once; PINRATE_CORE=0 skips it)" && \
+		$(BIN)/python -m pip install --quiet $(CORE_BUILD_DEPS) > $(VENV)/core-build.log 2>&1 && \
+		$(BIN)/python -m pip install --no-build-isolation ./core >> $(VENV)/core-build.log 2>&1; then \
 		echo "pinrate: compiled core built ($$($(BIN)/python -c 'import pinrate.compiled as c; print(c.backend())'))"; \
+		echo 1 > $@; \
 	else \
 		$(BIN)/python -m pip uninstall --quiet --yes pinrate-core 2>/dev/null; \
-		echo "pinrate: the compiled core did not build (no C++ compiler?): the pure-Python path runs"; \
+		grep -m 3 -E "CMake Error|error:|not able to compile" $(VENV)/core-build.log | sed 's/^ */  /'; \
+		echo "pinrate: the compiled core did not build (no C++ compiler? $(VENV)/core-build.log says why):"; \
+		echo "pinrate: the pure-Python path runs, with the same results"; \
+		echo failed > $@; \
 	fi
-	@echo $(PINRATE_CORE) > $@
 
-# A change of PINRATE_CORE rebuilds (or removes) the core.
+# A change of PINRATE_CORE rebuilds (or removes) the core; a build that failed is tried again.
 ifneq ($(shell cat $(VENV)/.core 2>/dev/null),$(PINRATE_CORE))
 .PHONY: $(VENV)/.core
 endif
