@@ -10,6 +10,16 @@ from __future__ import annotations
 
 from .core import Backend, backend, core_module, use
 from .kinematics import core_kinematics
-from .servo import CoreServo, ServoSettings, rho_map
+from .servo import CoreServo, ServoSettings, core_servo, rho_map
 
-__all__ = ["Backend", "CoreServo", "ServoSettings", "backend", "core_kinematics", "core_module", "rho_map", "use"]
+__all__ = [
+    "Backend",
+    "CoreServo",
+    "ServoSettings",
+    "backend",
+    "core_kinematics",
+    "core_module",
+    "core_servo",
+    "rho_map",
+    "use",
+]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from typing import Any
 
@@ -37,8 +38,8 @@ class ServoSettings:
         max_linear_speed, max_angular_speed: m/s, rad/s (inf for none).
         dt: s.
         position_limits: keep q within the limits.
-        limits: (L, 4) rows of q index, v index, lower, upper (rad or m).
-        rate_limits: (R, 2) rows of v index, limit (rad/s or m/s).
+        limits: rows (q index, v index, lower, upper) of the position limits (rad or m).
+        rate_limits: rows (v index, limit) of the velocity limits (rad/s or m/s).
         exact_rcond, dls_damping: :mod:`pinrate.solvers.reference`'s constants.
         small: A and W square of size <= 3 (the closed forms); else pseudo-inverses, which
             needs A not tall and W not wide (ρ of the pseudo-inverse G is then the error map's).
@@ -61,8 +62,8 @@ class ServoSettings:
     max_angular_speed: float
     dt: float
     position_limits: bool
-    limits: np.ndarray
-    rate_limits: np.ndarray
+    limits: tuple[tuple[int, int, float, float], ...]
+    rate_limits: tuple[tuple[int, float], ...]
     exact_rcond: float
     dls_damping: float
     small: bool = True
@@ -101,8 +102,8 @@ class CoreServo:
             settings.max_angular_speed,
             settings.dt,
             settings.position_limits,
-            np.ascontiguousarray(settings.limits, dtype=float).reshape(-1, 4),
-            np.ascontiguousarray(settings.rate_limits, dtype=float).reshape(-1, 2),
+            np.array(settings.limits, dtype=float).reshape(-1, 4),
+            np.array(settings.rate_limits, dtype=float).reshape(-1, 2),
             settings.exact_rcond,
             settings.dls_damping,
             settings.small,
@@ -127,6 +128,29 @@ class CoreServo:
 
 
 _maps: weakref.WeakKeyDictionary[Robot, dict[tuple[object, ...], CoreServo]] = weakref.WeakKeyDictionary()
+_servos: weakref.WeakKeyDictionary[Robot, dict[Hashable, CoreServo]] = weakref.WeakKeyDictionary()
+
+MAX_CACHED_SERVOS = 64
+"""Compiled servos kept per robot (a servo call builds its controller afresh; the same
+settings come back, and building the core's twin costs as much as a few dozen steps)."""
+
+
+def core_servo(robot: Robot, key: Hashable, settings: Callable[[], ServoSettings]) -> CoreServo:
+    """The :class:`CoreServo` of ``robot`` for a controller whose settings ``key`` stands for
+    (a cheap tuple of everything that ``settings()`` reads), built once and kept.
+
+    Raises:
+        UnsupportedByCoreError: as :class:`CoreServo` does.
+    """
+    if core_module() is None:
+        raise UnsupportedByCoreError("the Python path is chosen")
+    servos = _servos.setdefault(robot, {})
+    servo = servos.get(key)
+    if servo is None:
+        if len(servos) >= MAX_CACHED_SERVOS:
+            servos.clear()
+        servo = servos[key] = CoreServo(robot, settings())
+    return servo
 
 
 def rho_map(robot: Robot, rows: tuple[int, ...], columns: tuple[int, ...], m: int, n_arm: int) -> CoreServo | None:

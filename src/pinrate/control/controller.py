@@ -37,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..checks import check_positive, check_vector
-from ..compiled import CoreServo, ServoSettings, backend, core_kinematics
+from ..compiled import CoreServo, ServoSettings, backend, core_kinematics, core_servo
 from ..errors import InputError, SingularBlockError, UnsupportedByCoreError
 from ..kinematics.axes import Axis, wrist_axes, wrist_centre
 from ..kinematics.home import generic_ranks
@@ -419,8 +419,22 @@ class Controller:
         core does not cover (:meth:`compiled_reason` says which)."""
         if self.compiled_reason() is not None:
             return None
+        # Everything _compiled_settings reads: a servo call builds a controller afresh, and the
+        # same settings come back.
+        key = (
+            self.partition,
+            self.algorithm,
+            self.dt,
+            self.max_linear_speed,
+            self.max_angular_speed,
+            self.slow_threshold,
+            self.singularity,
+            self.position_limits,
+            self.velocity_limits.tobytes(),
+            self._limits,
+        )
         try:
-            return CoreServo(self.robot, self._compiled_settings())
+            return core_servo(self.robot, key, self._compiled_settings)
         except UnsupportedByCoreError:
             return None
 
@@ -462,8 +476,8 @@ class Controller:
             max_angular_speed=self.max_angular_speed,
             dt=self.dt,
             position_limits=self.position_limits,
-            limits=np.array([(limit.index, limit.velocity, limit.lower, limit.upper) for limit in self._limits]),
-            rate_limits=np.array(self._rate_limit_rows),
+            limits=tuple((limit.index, limit.velocity, limit.lower, limit.upper) for limit in self._limits),
+            rate_limits=tuple(self._rate_limit_rows),
             exact_rcond=EXACT_RCOND,
             dls_damping=DLS_DAMPING,
             small=index.small,
