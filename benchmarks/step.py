@@ -22,24 +22,10 @@ import pinocchio as pin
 import timing
 
 import pinrate
-from pinrate.compiled import use
 from pinrate.kinematics.targets import nearby_target
 
 FLOOR = "pinocchio computeFrameJacobian (floor)"
 BARE = "bare Pinocchio+numpy exact servo step"
-
-
-def on(choice: str, function: Callable[[], object]) -> Callable[[], object]:
-    """``function`` run on one path ("python" or "compiled")."""
-
-    def run() -> object:
-        use(choice)
-        try:
-            return function()
-        finally:
-            use(None)
-
-    return run
 
 
 def measure(robot_name: str, *, batch: int, rounds: int) -> tuple[list[timing.Row], dict[str, float]]:
@@ -94,12 +80,12 @@ def measure(robot_name: str, *, batch: int, rounds: int) -> tuple[list[timing.Ro
     guarded = pinrate.Controller(robot, partition=partition, collision=True)
     functions["controller step, self-collision (exact)"] = (batched(lambda: guarded.step(q, twist)), batch)
     functions[BARE] = (batched(bare_servo_step), batch)
-    functions["servo step, python, mca1, 300-step run"] = (on("python", servo("mca1", 300)), 300)
-    functions["servo step, python, exact, 300-step run"] = (on("python", servo("exact", 300)), 300)
+    functions["servo step, python, mca1, 300-step run"] = (timing.on("python", servo("mca1", 300)), 300)
+    functions["servo step, python, exact, 300-step run"] = (timing.on("python", servo("exact", 300)), 300)
     if compiled:
-        functions["servo step, compiled, mca1, 2000-step run"] = (on("compiled", servo("mca1", 2000)), 2000)
-        functions["servo step, compiled, mca1, 300-step run"] = (on("compiled", servo("mca1", 300)), 300)
-        functions["servo step, compiled, exact, 2000-step run"] = (on("compiled", servo("exact", 2000)), 2000)
+        functions["servo step, compiled, mca1, 2000-step run"] = (timing.on("compiled", servo("mca1", 2000)), 2000)
+        functions["servo step, compiled, mca1, 300-step run"] = (timing.on("compiled", servo("mca1", 300)), 300)
+        functions["servo step, compiled, exact, 2000-step run"] = (timing.on("compiled", servo("exact", 2000)), 2000)
     rows = timing.interleaved(functions, rounds)
     solves: dict[str, float] = {}
     if compiled:  # the solve alone, timed in C++ (a Python call would cost more than the solve)

@@ -20,6 +20,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from pinrate.compiled import use
+
 
 @dataclass(frozen=True)
 class Row:
@@ -62,6 +64,19 @@ def interleaved(functions: dict[str, tuple[Callable[[], object], int]], rounds: 
         Row(name, statistics.median(values), percentile(values, 0.95), percentile(values, 0.99), len(values))
         for name, values in samples.items()
     ]
+
+
+def on(choice: str, function: Callable[[], object]) -> Callable[[], object]:
+    """``function`` run on one of pinrate's paths ("python" or "compiled"), then the default again."""
+
+    def run() -> object:
+        use(choice)
+        try:
+            return function()
+        finally:
+            use(None)
+
+    return run
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

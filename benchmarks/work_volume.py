@@ -28,18 +28,6 @@ import pinocchio as pin
 import timing
 
 import pinrate
-from pinrate.compiled import use
-
-
-def on(choice: str, function: Callable[[], object]) -> Callable[[], object]:
-    def run() -> object:
-        use(choice)
-        try:
-            return function()
-        finally:
-            use(None)
-
-    return run
 
 
 def main() -> None:
@@ -71,10 +59,10 @@ def main() -> None:
     methods: dict[str, tuple[Callable[[], object], int]] = {
         "naive loop: pinrate.convergence per q": (naive, args.naive_samples),
         "Pinocchio computeFrameJacobian alone (floor)": (floor, args.samples),
-        "sample_convergence, python (batched numpy)": (on("python", sample), args.samples),
+        "sample_convergence, python (batched numpy)": (timing.on("python", sample), args.samples),
     }
     if compiled:
-        methods["sample_convergence, compiled (one C++ loop)"] = (on("compiled", sample), args.samples)
+        methods["sample_convergence, compiled (one C++ loop)"] = (timing.on("compiled", sample), args.samples)
     if args.workers > 1:
         methods[f"sample_convergence, {args.workers} processes"] = (
             lambda: pinrate.sample_convergence(robot, args.samples, rng=0, workers=args.workers),

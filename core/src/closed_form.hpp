@@ -61,7 +61,8 @@ inline void check_singular(double det, const Block &M, const char *block) {
   if (!invertible(det, scale_squared)) throw Singular(block);
 }
 
-// closed_form.solve: x with M x = b (Cramer's rule), sizes 0 to 3.
+// closed_form.solve: x with M x = b (Cramer's rule), sizes 0 to 3. The 3x3 case repeats
+// inverse()'s cofactors on purpose, as the Python does: fused with the product, it skips M^-1.
 inline Vec3 solve(const Block &M, const Vec3 &b, const char *block) {
   Vec3 x;
   x.n = M.rows;
