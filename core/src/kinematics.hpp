@@ -63,6 +63,15 @@ struct Kinematics {
   Matrix6x jacobian_local, jacobian;
   SE3 world_T_tip, world_T_sensor;
 
+  Kinematics(const Kinematics &other, int)
+      : model(other.model),
+        data(other.model),
+        tip(other.tip),
+        sensor(other.sensor),
+        sensor_is_tip(other.sensor_is_tip),
+        jacobian_local(Matrix6x::Zero(6, other.model.nv)),
+        jacobian(Matrix6x::Zero(6, other.model.nv)) {}
+
   Kinematics(const std::vector<std::string> &kinds, const std::vector<int> &parents, const double *axes,
              const double *placements, int tip_joint, const double *tip_placement, int sensor_joint,
              const double *sensor_placement, bool same_frame) {
@@ -80,6 +89,13 @@ struct Kinematics {
     data = Data(model);
     jacobian_local = Matrix6x::Zero(6, model.nv);
     jacobian = Matrix6x::Zero(6, model.nv);
+  }
+
+  // A twin with its own Data and buffers (the model, read-only, copied): a loop that releases
+  // the GIL works on its own, whatever another thread does with this one.
+  Kinematics fresh() const {
+    Kinematics twin(*this, 0);
+    return twin;
   }
 
   int nq() const { return model.nq; }

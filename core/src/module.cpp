@@ -134,10 +134,13 @@ nb::tuple run_servo(Servo &servo, Array<const double> q0, Array<const double> ta
   return nb::make_tuple(outcome, state.step_number, state.best, state.progress, state.progress_step);
 }
 
-// rho at each configuration (N, nq); the servo's settings give the partition.
+// rho at each configuration (N, nq); the servo's settings give the partition. The map runs
+// on a twin of the robot's kinematics (its own Data): threads sharing a Robot (a Dask worker's)
+// may map at once.
 void spectral_radius_at(Servo &servo, Array<const double> configurations,
                         Array<double> radii) {
-  Kinematics &kinematics = servo.kinematics();
+  Kinematics kinematics = servo.kinematics().fresh();
+  const Servo mapper(kinematics, servo.settings());
   const std::size_t count = configurations.shape(0), nq = static_cast<std::size_t>(kinematics.nq());
   if (configurations.ndim() != 2 || configurations.shape(1) != nq || radii.size() != count)
     throw std::invalid_argument("configurations must be (N, nq) and radii (N,)");
@@ -146,7 +149,7 @@ void spectral_radius_at(Servo &servo, Array<const double> configurations,
   nb::gil_scoped_release release;
   for (std::size_t i = 0; i < count; ++i) {
     kinematics.compute_jacobian(Eigen::Map<const Vector>(source + i * nq, nq));
-    out[i] = servo.radius_here();
+    out[i] = mapper.radius_here();
   }
 }
 

@@ -195,6 +195,7 @@ class Servo {
   // rho at the configuration of the last kinematics pass.
   double radius_here() const { return s_.small ? radius_of(blocks()) : general_radius(reduced()); }
   Kinematics &kinematics() const { return kin_; }
+  const Settings &settings() const { return s_; }
 
  private:
   Kinematics &kin_;

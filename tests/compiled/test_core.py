@@ -46,6 +46,7 @@ def test_a_bad_choice_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_a_missing_core_falls_back_and_compiled_refuses(monkeypatch: pytest.MonkeyPatch) -> None:
     """As on a machine without a compiler: the import fails, auto runs Python and says why,
     and asking for the compiled path is an error that names the reason."""
+    monkeypatch.delenv("PINRATE_BACKEND", raising=False)  # auto, whatever the run's setting
     monkeypatch.setattr(core, "CORE_MODULE", "pinrate_core_that_was_never_built")
     monkeypatch.setattr(core, "_loaded", None)
     report = pinrate.backend()
@@ -63,6 +64,7 @@ def test_a_missing_core_falls_back_and_compiled_refuses(monkeypatch: pytest.Monk
 
 
 def test_a_core_of_another_abi_is_not_used(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("PINRATE_BACKEND", raising=False)
     stale = types.ModuleType("pinrate_core_of_another_release")
     stale.ABI = core.CORE_ABI + 1  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, stale.__name__, stale)

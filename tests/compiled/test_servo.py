@@ -9,12 +9,15 @@ arm), to 1e-12. The statuses, the details and the reason must be the same words.
 
 from __future__ import annotations
 
+import gc
 import math
 import signal
 import subprocess
 import sys
 import time
+import weakref
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
@@ -23,6 +26,7 @@ import pinrate
 from compiled_core import needs_core, path
 from pinrate.control.controller import Controller
 from pinrate.kinematics.targets import nearby_target
+from pinrate.theorem import spectral_radius_at
 from support import DATA
 
 pytestmark = needs_core
@@ -100,11 +104,20 @@ def test_random_targets_with_the_default_safety(name: str, algorithm: str, pytho
     """The URDF's velocity limits, position limits, decelerate near singularities."""
     robot = load(name)
     partition = pinrate.Partition.auto(robot)
-    assert Controller(robot, algorithm=algorithm).compiled() is not None, "this robot must run compiled"
+    with path("compiled"):
+        assert Controller(robot, algorithm=algorithm).compiled() is not None, "this robot must run compiled"
+    steps = handed_back = 0
     for seed in range(4):
         _, target = nearby_target(robot, partition, seed, spread=0.3 + 0.3 * seed)
-        python, compiled = both(robot, robot.home(), target, algorithm=algorithm, velocity_limits=None, max_steps=600)
+        settings = {"algorithm": algorithm, "velocity_limits": None, "max_steps": 600}
+        with path("python"):
+            python = pinrate.servo(robot, robot.home(), target, **settings)
+        python_steps.clear()
+        with path("compiled"):
+            compiled = pinrate.servo(robot, robot.home(), target, **settings)
+        steps, handed_back = steps + compiled.steps, handed_back + len(python_steps)
         assert_same(python, compiled, bitwise=bitwise(robot, algorithm))
+    assert handed_back < steps / 2, f"the core took only {steps - handed_back} of {steps} steps"
 
 
 def test_limits_and_singularities_hand_steps_back(python_steps: list[int]) -> None:
@@ -143,7 +156,8 @@ def test_a_run_longer_than_the_first_arrays() -> None:
 def test_a_prismatic_and_a_continuous_joint_and_a_sensor_mid_chain() -> None:
     robot = pinrate.load(DATA / "mixed_joints.urdf", tip="tool", sensor="link2")
     partition = pinrate.Partition(["yaw", "slide", "roll"], ["pitch"], linear="xyz", angular="z")
-    assert Controller(robot, partition=partition).compiled() is not None
+    with path("compiled"):
+        assert Controller(robot, partition=partition).compiled() is not None
     for seed in range(3):
         _, target = nearby_target(robot, partition, seed)
         python, compiled = both(robot, robot.home(), target, partition=partition, algorithm="mca1", max_steps=400)
@@ -198,3 +212,44 @@ def test_ctrl_c_reaches_a_long_compiled_run() -> None:
     assert time.monotonic() - sent < 2.0
     assert "finished" not in out
     assert process.returncode != 0 and "KeyboardInterrupt" in err
+
+
+def test_a_robot_the_core_has_seen_can_be_freed() -> None:
+    """The core's caches are keyed by the Robot and must not keep it alive."""
+    robot = pinrate.load("ur5")
+    _, target = nearby_target(robot, pinrate.Partition.auto(robot), 0)
+    with path("compiled"):
+        pinrate.servo(robot, robot.home(), target, max_steps=20)
+        pinrate.sample_convergence(robot, 100, rng=0)
+    alive = weakref.ref(robot)
+    del robot
+    gc.collect()
+    assert alive() is None
+
+
+def test_threads_sharing_a_robot_map_rho_alike() -> None:
+    """A Dask worker's threads share one Robot: each ρ map works on its own copy of the
+    kinematics, so the maps agree with one made alone."""
+    robot = pinrate.load("ur5")
+    configurations = robot.sample_configurations(20_000, 3)
+    with path("compiled"):
+        alone = spectral_radius_at(robot, configurations)
+        with ThreadPoolExecutor(4) as pool:
+            maps = list(pool.map(lambda _: spectral_radius_at(robot, configurations), range(8)))
+    for radii in maps:
+        np.testing.assert_array_equal(radii, alone)
+
+
+def test_edited_limits_reach_the_next_run() -> None:
+    robot = pinrate.load("ur5")
+    _, target = nearby_target(robot, pinrate.Partition.auto(robot), 1, spread=0.6)
+    with path("compiled"):
+        free = pinrate.servo(robot, robot.home(), target, max_steps=300)
+    upper = np.array(robot.model.upperPositionLimit)
+    upper[:] = robot.home() + 0.01  # every joint may move up by 0.01 rad at most
+    robot.model.upperPositionLimit = upper
+    for choice in ("python", "compiled"):
+        with path(choice):
+            held = pinrate.servo(robot, robot.home(), target, max_steps=300)
+        assert "joint limit" in held.status and "joint limit" not in free.status
+        assert (held.q <= upper + 1e-12).all()

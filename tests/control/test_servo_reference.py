@@ -29,7 +29,7 @@ LAPACK_RUNS = {"demo-ur5-exact-0", "demo-ur5-dls-0", "demo-panda-mca1-0"}
 @pytest.fixture(autouse=True)
 def python_path() -> Iterator[None]:
     """The release's runs were made on Python: the Python path must reproduce them to the bit
-    (the compiled path is held to the Python one in tests/compiled/test_two_paths.py)."""
+    (the compiled path is held to the Python one in tests/compiled/test_servo.py)."""
     use("python")
     yield
     use(None)

@@ -2,7 +2,9 @@
 
 The core rebuilds a private Pinocchio model from the Python model's arrays (joint kinds,
 parents, placements, the tip and sensor frames), so it links no Pinocchio library and makes
-the same Pinocchio calls on the same numbers as the Python side.
+the same Pinocchio calls on the same numbers as the Python side. It reads them once per
+Robot: after editing ``robot.model``'s joints or frames in place, load a new Robot (limits
+are not part of the rebuilt model: the controller passes them each run).
 """
 
 from __future__ import annotations

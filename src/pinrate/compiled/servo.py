@@ -83,8 +83,7 @@ class CoreServo:
         if settings.small and (len(settings.rows) - settings.m > 3 or settings.m > 3 or settings.n_arm > 3):
             raise UnsupportedByCoreError("the closed forms take blocks of at most 3x3")
         self.core = core
-        self.robot = robot
-        self.settings = settings
+        self.settings = settings  # no reference to the robot: the caches keyed by it must let it go
         self._servo = core.Servo(
             kinematics,
             list(settings.rows),

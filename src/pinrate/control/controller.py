@@ -214,15 +214,24 @@ class _Facts(NamedTuple):
     wrist_body: int  # the joint whose body carries the wrist centre
 
 
-_FACTS: weakref.WeakKeyDictionary[Robot, dict[Partition, _Facts]] = weakref.WeakKeyDictionary()
+_FACTS: weakref.WeakKeyDictionary[Robot, dict[Partition, tuple[tuple[bytes, ...], _Facts]]] = (
+    weakref.WeakKeyDictionary()
+)
 
 
 def _facts(robot: Robot, partition: Partition) -> _Facts:
     """The :class:`_Facts` of ``robot`` and ``partition``, computed once (a servo call builds a
-    controller, and these cost more than the run's loop)."""
+    controller, and these cost more than the run's loop), and again when the model's limits or
+    the home configuration they depend on were edited since."""
+    model = robot.model
+    edited = (
+        np.asarray(model.lowerPositionLimit).tobytes(),
+        np.asarray(model.upperPositionLimit).tobytes(),
+        np.asarray(model.velocityLimit).tobytes(),
+        robot.home().tobytes(),
+    )
     cache = _FACTS.setdefault(robot, {})
-    if partition not in cache:
-        model = robot.model
+    if partition not in cache or cache[partition][0] != edited:
         index = partition.resolve(robot)
         limits = []
         for joint in robot.joint_names:
@@ -233,7 +242,7 @@ def _facts(robot: Robot, partition: Partition) -> _Facts:
         urdf = np.array(model.velocityLimit, dtype=float)
         home = robot.jacobian_unchecked(robot.home())[np.ix_(index.rows, index.columns)]
         wrist_ids = [robot.joint_id(name) for name in partition.wrist]
-        cache[partition] = _Facts(
+        cache[partition] = edited, _Facts(
             limits=tuple(limits),
             urdf_velocity_limits=np.where((urdf > 0) & (urdf < VELOCITY_LIMIT_UNLIMITED), urdf, np.inf),
             characteristic_length=characteristic_length(home, index.m),
@@ -245,7 +254,7 @@ def _facts(robot: Robot, partition: Partition) -> _Facts:
             # chain (or the tip's body without a wrist).
             wrist_body=model.parents[min(wrist_ids)] if wrist_ids else model.frames[robot.tip_id].parentJoint,
         )
-    return cache[partition]
+    return cache[partition][1]
 
 
 class _Plan(NamedTuple):
