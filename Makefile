@@ -15,7 +15,7 @@ $(VENV)/.installed: $(BIN)/python pyproject.toml
 
 # The compiled core (core/, pinrate_core): built where a C++ compiler works, skipped where
 # none does (pinrate then runs its pure-Python path). PINRATE_CORE=0 skips it on purpose.
-# It costs about 90 s of compile time and 2.5 GB of memory, once.
+# It costs about 2 minutes of compile time and 3.2 GB of memory, once.
 CORE_BUILD_DEPS := scikit-build-core nanobind cmake ninja cmeel-eigen
 PINRATE_CORE ?= 1
 $(VENV)/.core: $(VENV)/.installed core/pyproject.toml core/CMakeLists.txt $(wildcard core/src/*)
@@ -23,7 +23,7 @@ $(VENV)/.core: $(VENV)/.installed core/pyproject.toml core/CMakeLists.txt $(wild
 		$(BIN)/python -m pip uninstall --quiet --yes pinrate-core 2>/dev/null; \
 		echo "pinrate: the compiled core is off (PINRATE_CORE=0): the pure-Python path runs"; \
 		echo 0 > $@; \
-	elif echo "pinrate: building the compiled core (about 90 s, once; PINRATE_CORE=0 skips it)" && \
+	elif echo "pinrate: building the compiled core (about 2 minutes, once; PINRATE_CORE=0 skips it)" && \
 		$(BIN)/python -m pip install --quiet $(CORE_BUILD_DEPS) > $(VENV)/core-build.log 2>&1 && \
 		$(BIN)/python -m pip install --no-build-isolation ./core >> $(VENV)/core-build.log 2>&1; then \
 		echo "pinrate: compiled core built ($$($(BIN)/python -c 'import pinrate.compiled as c; print(c.backend())'))"; \
