@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 
+import pinrate
 from pinrate.cli import main
 from pinrate.robots import ROBOT_NAMES
 
@@ -67,3 +68,16 @@ def test_demo_starts_at_q0_given_per_joint(capsys: pytest.CaptureFixture[str]) -
     ur5 = pinrate.load("ur5")
     _, target = nearby_target(ur5, pinrate.Partition.auto(ur5), 0, start=q0)
     assert printed == pytest.approx(np.linalg.norm(target[:3, 3] - ur5.pose(q0)[:3, 3]), rel=1e-3)
+
+
+def test_version_names_the_backend(monkeypatch: pytest.MonkeyPatch) -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "pinrate.cli", "--version"], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines() == [f"pinrate {pinrate.__version__}", f"backend: {pinrate.backend()}"]
+    monkeypatch.setenv("PINRATE_BACKEND", "python")
+    result = subprocess.run(
+        [sys.executable, "-m", "pinrate.cli", "--version"], capture_output=True, text=True, timeout=60, check=False
+    )
+    assert "backend: python (PINRATE_BACKEND=python)" in result.stdout

@@ -13,8 +13,9 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from .. import analysis, robots
+from .. import __version__, analysis, robots
 from ..checks import check_output_file, check_output_folder
+from ..compiled import backend
 from ..control.servo_loop import servo
 from ..control.trajectory import Trajectory
 from ..errors import InputError, PinrateError
@@ -304,9 +305,22 @@ def _robot_arguments(parser: argparse.ArgumentParser, tip_help: str, sensor_help
     )
 
 
+class _Version(argparse.Action):
+    """``--version``: pinrate's version and the path its loops take (the compiled core or
+    pure Python, and why)."""
+
+    def __init__(self, option_strings: list[str], dest: str, **keywords: object) -> None:
+        super().__init__(option_strings, dest, nargs=0, help="print the version and the backend, then exit")
+
+    def __call__(self, parser: argparse.ArgumentParser, *_: object) -> None:
+        print(f"pinrate {__version__}\nbackend: {backend()}")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = Parser(prog="pinrate", description="Resolved-rate motion control for URDF arms.")
     parser.add_argument("-v", "--verbose", action="store_true", help="log what pinrate chooses")
+    parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
 
     listing = commands.add_parser("list", help="print every robot name pinrate can load")
