@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import timing
 
 import pinrate
 from pinrate.teleop.server import TeleopServer
@@ -95,6 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--presses", type=int, default=30, help="key presses whose latency is measured")
     parser.add_argument("--width", type=int, default=1200)
     parser.add_argument("--height", type=int, default=760)
+    timing.add_arguments(parser)
     args = parser.parse_args(argv)
     if not Path(CHROMIUM).exists():
         print(f"needs Chromium at {CHROMIUM}", file=sys.stderr)
@@ -113,6 +115,13 @@ def main(argv: list[str] | None = None) -> int:
             f"\nkey to painted frame (Chromium, headless): median {statistics.median(latencies):.1f} ms, "
             f"max {latencies.max():.1f} ms, p90 {np.percentile(latencies, 90):.1f} ms"
         )
+    rows = [
+        timing.row_of("bare loop period", result["baseline"].tolist()),
+        timing.row_of("teleop console loop period", result["periods"].tolist()),
+    ]
+    if latencies.size:
+        rows.append(timing.row_of("key to painted frame", (latencies * 1e-3).tolist()))
+    timing.finish(rows, args, {"rate": args.rate, "seconds": args.seconds, "presses": args.presses})
     return 0
 
 

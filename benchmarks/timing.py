@@ -43,6 +43,11 @@ def percentile(values: list[float], fraction: float) -> float:
     return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
 
 
+def row_of(name: str, values: list[float]) -> Row:
+    """A row from samples measured elsewhere (a loop's periods, latencies), in seconds."""
+    return Row(name, statistics.median(values), percentile(values, 0.95), percentile(values, 0.99), len(values))
+
+
 def interleaved(functions: dict[str, tuple[Callable[[], object], int]], rounds: int, *, warm: int = 3) -> list[Row]:
     """Seconds per unit of each (function, units per call), measured round-robin.
 
@@ -60,10 +65,7 @@ def interleaved(functions: dict[str, tuple[Callable[[], object], int]], rounds: 
             elapsed = time.perf_counter() - start
             count = done if isinstance(done, int) and not isinstance(done, bool) and done > 0 else units
             samples[name].append(elapsed / count)
-    return [
-        Row(name, statistics.median(values), percentile(values, 0.95), percentile(values, 0.99), len(values))
-        for name, values in samples.items()
-    ]
+    return [row_of(name, values) for name, values in samples.items()]
 
 
 def on(choice: str, function: Callable[[], object]) -> Callable[[], object]:
@@ -100,7 +102,7 @@ def save(rows: list[Row], path: Path, settings: dict[str, object]) -> None:
 def compare(rows: list[Row], path: Path) -> None:
     before = json.loads(path.read_text(encoding="utf-8"))["rows"]
     print(f"\nagainst {path} (median after / before; < 1 is faster):\n")
-    print(f"| {'row':<58} | {'before':>10} | {'after':>10} | {'ratio':>6} |")
+    print(f"| {'row':<58} | {'before, µs':>10} | {'after, µs':>10} | {'ratio':>6} |")
     print(f"|{'-' * 60}|{'-' * 12}|{'-' * 12}|{'-' * 8}|")
     for row in rows:
         old = before.get(row.name)
