@@ -441,6 +441,9 @@ class Controller:
             self.position_limits,
             self.velocity_limits.tobytes(),
             self._limits,
+            self.characteristic_length,
+            self._square_j,
+            tuple(self._ranks.values()),
         )
         try:
             return core_servo(self.robot, key, self._compiled_settings)
