@@ -232,7 +232,8 @@ class _Run:
             if outcome not in (outcomes.HANDBACK, outcomes.FULL):
                 self._conclude(outcome, outcomes)
                 return
-            # The core recorded this step's observation and judged it; Python takes the step.
+            # The core recorded this step's observation and judged it; Python takes the step
+            # from an observation of its own (one more kinematics pass, on these steps only).
             q = self.log.q[self.step_number]
             if self._python_step(self.controller.observe_unchecked(q, self.goal)):
                 return
