@@ -16,7 +16,7 @@ $(VENV)/.installed: $(BIN)/python pyproject.toml
 # The compiled core (core/, pinrate_core): built where a C++ compiler works, skipped where
 # none does (pinrate then runs its pure-Python path). PINRATE_CORE=0 skips it on purpose.
 # It costs about 2 minutes of compile time and 3.2 GB of memory, once.
-CORE_BUILD_DEPS := scikit-build-core nanobind cmake ninja cmeel-eigen
+CORE_BUILD_DEPS := "scikit-build-core>=0.10,<2" "nanobind>=2.0,<4" "cmake>=3.18" ninja "cmeel-eigen>=3.4,<4"
 PINRATE_CORE ?= 1
 $(VENV)/.core: $(VENV)/.installed core/pyproject.toml core/CMakeLists.txt $(wildcard core/src/*)
 	@if [ "$(PINRATE_CORE)" = 0 ]; then \
