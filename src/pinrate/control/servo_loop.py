@@ -204,8 +204,8 @@ class _Run:
     # ------------------------------------------------------------------ the two paths
     def python(self) -> None:
         while True:
-            observation = self._record()
-            if self._judge():
+            observation, position, orientation = self._record()
+            if self._judge(position, orientation):
                 return
             if self._python_step(observation):
                 return
@@ -239,21 +239,21 @@ class _Run:
                 return
 
     # ------------------------------------------------------------------ one step's parts
-    def _record(self) -> Observation:
+    def _record(self) -> tuple[Observation, float, float]:
+        """This step's observation, logged; and its error norms (m, rad) as Python floats."""
         observation = self.controller.observe_unchecked(self.log.q[self.step_number], self.goal)
         position, orientation = error_norms(observation, self.m)
         self.log.position[self.step_number] = position
         self.log.orientation[self.step_number] = orientation
         self.log.radius[self.step_number] = observation.spectral_radius
-        return observation
+        return observation, position, orientation
 
-    def _judge(self) -> bool:
-        """The stop rules at this step's recorded errors; True when the run ends here."""
+    def _judge(self, position: float, orientation: float) -> bool:
+        """The stop rules at this step's error norms; True when the run ends here."""
         step_number = self.step_number
-        position, orientation = self.log.position[step_number], self.log.orientation[step_number]
-        total = float(position + orientation)
+        total = position + orientation
         if position < self.tol and orientation < self.tol:
-            self.final, self.reason = "converged", f"converged in {step_number} steps"
+            self._converged()
             return True
         self.best = min(self.best, total)
         if total > DIVERGENCE_FACTOR * self.best + self.tol:
@@ -265,9 +265,16 @@ class _Run:
             self._stalled(total)
             return True
         if step_number == self.max_steps:
-            self.final, self.reason = "max steps", f"max_steps ({self.max_steps}) reached"
+            self._out_of_steps()
             return True
         return False
+
+    # The final word and reason of each stop rule, whichever path ended the run.
+    def _converged(self) -> None:
+        self.final, self.reason = "converged", f"converged in {self.step_number} steps"
+
+    def _out_of_steps(self) -> None:
+        self.final, self.reason = "max steps", f"max_steps ({self.max_steps}) reached"
 
     def _diverging(self, total: float) -> None:
         growth = f"error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best {self.best:.4g}"
@@ -285,13 +292,13 @@ class _Run:
         """The final word and reason of a run the core ended."""
         total = float(self.log.position[self.step_number] + self.log.orientation[self.step_number])
         if outcome == outcomes.CONVERGED:
-            self.final, self.reason = "converged", f"converged in {self.step_number} steps"
+            self._converged()
         elif outcome == outcomes.DIVERGING:
             self._diverging(total)
         elif outcome == outcomes.STALLED:
             self._stalled(total)
         else:
-            self.final, self.reason = "max steps", f"max_steps ({self.max_steps}) reached"
+            self._out_of_steps()
 
     def _python_step(self, observation: Observation) -> bool:
         """Controller.step from this step's observation; True when it halts the run."""
