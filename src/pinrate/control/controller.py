@@ -196,6 +196,10 @@ WATCHED_STEP = 0.02
 """rad (or m): a step moving some joint further than this, near the singular region, is
 judged one step ahead."""
 
+DECELERATING = ("decelerate", "auxiliary_elbow")
+"""The strategies that decelerate in the singular region (auxiliary_elbow outside its elbow
+region), judging a big step near it one step ahead."""
+
 VELOCITY_LIMIT_UNLIMITED = 1e6
 """A URDF velocity limit of 0 (what converters write for "unknown") or above this (rad/s or
 m/s) means no limit."""
@@ -224,11 +228,12 @@ def _facts(robot: Robot, partition: Partition) -> _Facts:
     controller, and these cost more than the run's loop), and again when the model's limits or
     the home configuration they depend on were edited since."""
     model = robot.model
+    home_q = robot.home()
     edited = (
         np.asarray(model.lowerPositionLimit).tobytes(),
         np.asarray(model.upperPositionLimit).tobytes(),
         np.asarray(model.velocityLimit).tobytes(),
-        robot.home().tobytes(),
+        home_q.tobytes(),
     )
     cache = _FACTS.setdefault(robot, {})
     if partition not in cache or cache[partition][0] != edited:
@@ -240,7 +245,7 @@ def _facts(robot: Robot, partition: Partition) -> _Facts:
                 joint_model = model.joints[robot.joint_id(joint)]
                 limits.append(_Limit(joint, joint_model.idx_q, joint_model.idx_v, *bounds))
         urdf = np.array(model.velocityLimit, dtype=float)
-        home = robot.jacobian_unchecked(robot.home())[np.ix_(index.rows, index.columns)]
+        home = robot.jacobian_unchecked(home_q)[np.ix_(index.rows, index.columns)]
         wrist_ids = [robot.joint_id(name) for name in partition.wrist]
         cache[partition] = edited, _Facts(
             limits=tuple(limits),
@@ -481,7 +486,7 @@ class Controller:
             measured=self._measured,
             row_scale=tuple(self._row_scale.tolist()),
             slow_threshold=self.slow_threshold,
-            watch=self.singularity in ("decelerate", "auxiliary_elbow"),
+            watch=self.singularity in DECELERATING,
             watch_factor=WATCH_FACTOR,
             watched_step=WATCHED_STEP,
             max_linear_speed=self.max_linear_speed,
@@ -934,7 +939,7 @@ class Controller:
         under :data:`WATCH_FACTOR` x slow) that moves some joint more than
         :data:`WATCHED_STEP` rad, which could enter the region or cross a singularity in one
         step (a servo's big steps do). None otherwise."""
-        if self.singularity not in ("decelerate", "auxiliary_elbow"):
+        if self.singularity not in DECELERATING:
             return None
         if plan is not None:
             return (plan.columns, plan.value, plan.block) if plan.decelerate else None
@@ -986,7 +991,7 @@ class Controller:
         where = f"block {weakest.block} near singular (c = {weakest.value:.2g} < {self.slow_threshold:g})"
         frozen: tuple[str, ...] = ()
         invert, decelerate = generalized, False
-        if self.singularity in ("decelerate", "auxiliary_elbow"):  # outside the elbow's region
+        if self.singularity in DECELERATING:  # outside the elbow's region
             decelerate = True
         elif self.singularity == "generalized_inverse":
             statuses.append(Status.NEAR_SINGULARITY)
