@@ -126,12 +126,12 @@ class CoreServo:
         return self._servo.solve_timing(q, np.ascontiguousarray(twist, dtype=float), KERNELS.index(algorithm), repeats)
 
 
-_maps: weakref.WeakKeyDictionary[Robot, dict[tuple[object, ...], CoreServo]] = weakref.WeakKeyDictionary()
 _servos: weakref.WeakKeyDictionary[Robot, dict[Hashable, CoreServo]] = weakref.WeakKeyDictionary()
 
 MAX_CACHED_SERVOS = 64
-"""Compiled servos kept per robot (a servo call builds its controller afresh; the same
-settings come back, and building the core's twin costs as much as a few dozen steps)."""
+"""Compiled servos (and ρ maps) kept per robot (a servo call builds its controller afresh;
+the same settings come back, and building the core's twin costs as much as a few dozen
+steps)."""
 
 
 def core_servo(robot: Robot, key: Hashable, settings: Callable[[], ServoSettings]) -> CoreServo:
@@ -153,16 +153,15 @@ def core_servo(robot: Robot, key: Hashable, settings: Callable[[], ServoSettings
 
 
 def rho_map(robot: Robot, rows: tuple[int, ...], columns: tuple[int, ...], m: int, n_arm: int) -> CoreServo | None:
-    """A compiled ρ map of ``robot`` for a partition's rows and columns (built once per robot
-    and partition), or None where the Python path is chosen or the core does not cover it
-    (a joint it does not rebuild; blocks that are not square of size 1 to 3)."""
+    """A compiled ρ map of ``robot`` for a partition's rows and columns (kept as the servos
+    are), or None where the Python path is chosen or the core does not cover it (a joint it
+    does not rebuild; a tall A or a wide W, whose ρ is the error map's)."""
     k, n_wrist = len(rows) - m, len(columns) - n_arm
     if core_module() is None or not pseudo_g_is_exact(m, n_arm, k, n_wrist):
         return None
-    key = (rows, columns, m, n_arm)
-    maps = _maps.setdefault(robot, {})
-    if key not in maps:
-        settings = ServoSettings(
+
+    def settings() -> ServoSettings:  # only the partition matters to a ρ map
+        return ServoSettings(
             rows=rows,
             columns=columns,
             m=m,
@@ -178,14 +177,14 @@ def rho_map(robot: Robot, rows: tuple[int, ...], columns: tuple[int, ...], m: in
             max_angular_speed=math.inf,
             dt=1.0,
             position_limits=False,
-            limits=np.zeros((0, 4)),
-            rate_limits=np.zeros((0, 2)),
+            limits=(),
+            rate_limits=(),
             exact_rcond=0.0,
             dls_damping=0.0,
             small=square_and_small(m, n_arm, k, n_wrist),
         )
-        try:
-            maps[key] = CoreServo(robot, settings)
-        except UnsupportedByCoreError:
-            return None
-    return maps[key]
+
+    try:
+        return core_servo(robot, ("rho map", rows, columns, m, n_arm), settings)
+    except UnsupportedByCoreError:
+        return None
