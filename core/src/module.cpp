@@ -34,18 +34,18 @@ T *data_of(Array<T> &array, std::size_t rows, const char *what) {
   return array.data();
 }
 
-Kinematics *make_kinematics(const std::vector<std::string> &kinds, const std::vector<int> &parents,
+Kinematics make_kinematics(const std::vector<std::string> &kinds, const std::vector<int> &parents,
                             Array<const double> axes, Array<const double> placements, int tip_joint,
                             Array<const double> tip_placement, int sensor_joint, Array<const double> sensor_placement,
                             bool same_frame) {
   if (parents.size() != kinds.size() || axes.size() != 3 * kinds.size() || placements.size() != 16 * kinds.size() ||
       tip_placement.size() != 16 || sensor_placement.size() != 16)
     throw std::invalid_argument("joint arrays of mismatched sizes");
-  return new Kinematics(kinds, parents, axes.data(), placements.data(), tip_joint, tip_placement.data(), sensor_joint,
+  return Kinematics(kinds, parents, axes.data(), placements.data(), tip_joint, tip_placement.data(), sensor_joint,
                         sensor_placement.data(), same_frame);
 }
 
-Servo *make_servo(Kinematics &kinematics, const std::vector<int> &rows, const std::vector<int> &columns, int m,
+Servo make_servo(Kinematics &kinematics, const std::vector<int> &rows, const std::vector<int> &columns, int m,
                   int n_arm, int kernel, const std::vector<std::string> &measured, const std::vector<double> &row_scale,
                   double slow_threshold, bool watch, double watch_factor, double watched_step,
                   double max_linear_speed, double max_angular_speed, double dt, bool position_limits,
@@ -97,7 +97,7 @@ Servo *make_servo(Kinematics &kinematics, const std::vector<int> &rows, const st
     throw std::invalid_argument("the closed forms take blocks of at most 3x3");
   if (m < 0 || m > n_rows || n_arm < 0 || n_arm > static_cast<int>(columns.size()))
     throw std::invalid_argument("m or n_arm out of range");
-  return new Servo(kinematics, std::move(s));
+  return Servo(kinematics, std::move(s));
 }
 
 nb::tuple run_servo(Servo &servo, Array<const double> q0, Array<const double> target,
@@ -201,10 +201,8 @@ NB_MODULE(pinrate_core, module) {
               Array<const double> axes, Array<const double> placements, int tip_joint,
               Array<const double> tip_placement, int sensor_joint, Array<const double> sensor_placement,
               bool same_frame) {
-             Kinematics *made = make_kinematics(kinds, parents, axes, placements, tip_joint, tip_placement,
-                                                sensor_joint, sensor_placement, same_frame);
-             new (self) Kinematics(std::move(*made));
-             delete made;
+             new (self) Kinematics(make_kinematics(kinds, parents, axes, placements, tip_joint, tip_placement,
+                                                   sensor_joint, sensor_placement, same_frame));
            })
       .def_prop_ro("nq", &Kinematics::nq)
       .def_prop_ro("nv", &Kinematics::nv)
@@ -228,12 +226,10 @@ NB_MODULE(pinrate_core, module) {
               double watched_step, double max_linear_speed, double max_angular_speed, double dt,
               bool position_limits, Array<const double> limits, Array<const double> rate_limits, double exact_rcond,
               double dls_damping, bool small, const std::vector<int> &ranks, double pinv_rcond) {
-             Servo *made = make_servo(kinematics, rows, columns, m, n_arm, kernel, measured, row_scale,
+             new (self) Servo(make_servo(kinematics, rows, columns, m, n_arm, kernel, measured, row_scale,
                                       slow_threshold, watch, watch_factor, watched_step, max_linear_speed,
                                       max_angular_speed, dt, position_limits, limits, rate_limits, exact_rcond,
-                                      dls_damping, small, ranks, pinv_rcond);
-             new (self) Servo(std::move(*made));
-             delete made;
+                                      dls_damping, small, ranks, pinv_rcond));
            },
            nb::keep_alive<1, 2>())
       .def("run", &run_servo)
