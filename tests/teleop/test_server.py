@@ -175,9 +175,7 @@ def test_ctrl_c_quits_and_sigterm_terminates_freeing_the_port(signum, code):
     ],
 )
 def test_bad_options_are_one_line_and_exit_2(arguments, message):
-    result = subprocess.run(
-        [*COMMAND, "teleop", "ur5", *arguments], capture_output=True, text=True, timeout=60
-    )
+    result = subprocess.run([*COMMAND, "teleop", "ur5", *arguments], capture_output=True, text=True, timeout=60)
     assert result.returncode == 2, result.stderr
     assert message in result.stderr
     assert result.stderr.startswith("pinrate: error:") and "Traceback" not in result.stderr

@@ -87,8 +87,10 @@ def run(args: argparse.Namespace) -> int:
         warn(str(warning.message))
     try:
         print(f"partition  {teleop.controller.partition.describe(robot)}".replace("\n", "\n           "))
-        print(f"teleop     {robot.name}: {args.rate:g} Hz, {teleop.controller.algorithm}, "
-              f"singularity {args.singularity}, wrist {args.wrist}, dead man {args.timeout:g} s")
+        print(
+            f"teleop     {robot.name}: {args.rate:g} Hz, {teleop.controller.algorithm}, "
+            f"singularity {args.singularity}, wrist {args.wrist}, dead man {args.timeout:g} s"
+        )
         print("keys       W/S A/D E/Q: +-x +-y +-z   I/K J/L O/U: about +-x +-y +-z   Space: halt   B: reverse")
         print(f"console    {server.url}   (Ctrl-C to quit)", flush=True)
         if args.open:

@@ -247,17 +247,20 @@ def _facts(robot: Robot, partition: Partition) -> _Facts:
         urdf = np.array(model.velocityLimit, dtype=float)
         home = robot.jacobian_unchecked(home_q)[np.ix_(index.rows, index.columns)]
         wrist_ids = [robot.joint_id(name) for name in partition.wrist]
-        cache[partition] = edited, _Facts(
-            limits=tuple(limits),
-            urdf_velocity_limits=np.where((urdf > 0) & (urdf < VELOCITY_LIMIT_UNLIMITED), urdf, np.inf),
-            characteristic_length=characteristic_length(home, index.m),
-            ranks=generic_ranks(robot, partition),
-            velocity_of={name: model.joints[robot.joint_id(name)].idx_v for name in robot.joint_names},
-            joggable=tuple(name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1),
-            wrist_axes=wrist_axes(model, wrist_ids),
-            # The wrist centre rides on the body that carries the first wrist joint of the
-            # chain (or the tip's body without a wrist).
-            wrist_body=model.parents[min(wrist_ids)] if wrist_ids else model.frames[robot.tip_id].parentJoint,
+        cache[partition] = (
+            edited,
+            _Facts(
+                limits=tuple(limits),
+                urdf_velocity_limits=np.where((urdf > 0) & (urdf < VELOCITY_LIMIT_UNLIMITED), urdf, np.inf),
+                characteristic_length=characteristic_length(home, index.m),
+                ranks=generic_ranks(robot, partition),
+                velocity_of={name: model.joints[robot.joint_id(name)].idx_v for name in robot.joint_names},
+                joggable=tuple(name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1),
+                wrist_axes=wrist_axes(model, wrist_ids),
+                # The wrist centre rides on the body that carries the first wrist joint of the
+                # chain (or the tip's body without a wrist).
+                wrist_body=model.parents[min(wrist_ids)] if wrist_ids else model.frames[robot.tip_id].parentJoint,
+            ),
         )
     return cache[partition][1]
 

@@ -497,10 +497,7 @@ class TeleopServer:
             ):
                 self._state_version += 1
                 self._changed.set()
-            if (
-                (self._controller is None or now - self._last_heard > teleop.timeout)
-                and teleop.reversing
-            ):
+            if (self._controller is None or now - self._last_heard > teleop.timeout) and teleop.reversing:
                 teleop.stop()  # the page that asked for the reversal is gone or silent
                 self._event("reversal stopped: the controlling page is gone or silent", "warning")
             deadline += period

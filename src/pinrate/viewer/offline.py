@@ -59,9 +59,7 @@ class SceneCommands:
 
     def static_html(self, title: str = "pinrate") -> str:
         """A standalone page: meshcat's viewer inlined and the scene's commands run in it."""
-        commands = "\n".join(
-            f'  "{base64.b64encode(packed).decode("ascii")}",' for packed in self.packed()
-        )
+        commands = "\n".join(f'  "{base64.b64encode(packed).decode("ascii")}",' for packed in self.packed())
         return f"""<!DOCTYPE html>
 <html>
 <head><meta charset="utf-8"><title>{title}</title>
