@@ -48,3 +48,68 @@ def partition_rows_and_columns(robot: pinrate.Robot, partition: pinrate.Partitio
     rows = ["xyz".index(a) for a in partition.linear] + [3 + "xyz".index(a) for a in partition.angular]
     columns = [c for joint in partition.joints for c in robot.velocity_indices(joint)]
     return rows, columns
+
+
+EPS = float(np.finfo(float).eps)
+
+
+def spectral_radius_tolerance(
+    robot: pinrate.Robot, partition: pinrate.Partition, configurations: np.ndarray, *, jacobian_ulps: float = 64.0
+) -> np.ndarray:
+    """How far two honest computations of ρ (eq. 32, 50) may differ at each configuration,
+    from a bound rather than a machine's luck: where their G = U A^-1 B W^-1 (or H) differ
+    by at most ΔG in the 2-norm, Elsner's theorem (Linear Algebra Appl. 66, 1985) bounds the
+    distance between the two spectra, hence between the two spectral radii, by
+
+        (‖G₁‖ + ‖G₂‖)^(1 - 1/n) ‖ΔG‖^(1/n),     n = the size of the matrix whose ρ is taken.
+
+    The 1/n-th root is real: an eigenvalue of a defective (or nilpotent, ρ = 0) G moves by the
+    n-th root of a perturbation, so ρ of a G made of rounding noise is a cube root of noise.
+
+    ΔG is bounded to first order from the blocks of the sensor-frame Jacobian J (6, nv), the
+    two sides' J taken to differ by η = ``jacobian_ulps`` · ε · ‖J‖ (the same kinematics in
+    another order of operations) and their inverses of A and W by a further κ · ε relatively
+    (a backward-stable inversion): with P = U A^-1 and Q = B W^-1,
+
+        ‖ΔG‖ <= η (‖A^-1‖ ‖Q‖ + ‖P‖ ‖A^-1‖ ‖Q‖ + ‖P‖ ‖W^-1‖ + ‖P‖ ‖Q‖ ‖W^-1‖)
+                + 8 n ε (κ(A) + κ(W) + 1) ‖P‖ ‖Q‖,
+
+    the last term also covering the products and the closed-form eigenvalue routine's own
+    rounding (backward error about ε ‖G‖). Configurations where A or W loses rank get inf; a wide A or a tall W is pseudo-inverted
+    (the pseudo-inverse G), its smallest nonzero singular value in place of 1 / ‖A^-1‖.
+    """
+    rows, columns = partition_rows_and_columns(robot, partition)
+    m, n_arm = len(partition.linear), sum(len(robot.velocity_indices(joint)) for joint in partition.arm)
+    jacobians = np.stack([robot.jacobian(q) for q in configurations])
+    reduced = jacobians[:, rows][:, :, columns]
+    A, B = reduced[:, :m, :n_arm], reduced[:, :m, n_arm:]
+    U, W = reduced[:, m:, :n_arm], reduced[:, m:, n_arm:]
+
+    def singular_values(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The largest and the smallest of min(shape) singular values, per matrix."""
+        values = np.linalg.svd(matrices, compute_uv=False)
+        return values[:, 0], values[:, -1]
+
+    def norm(matrices: np.ndarray) -> np.ndarray:
+        return singular_values(matrices)[0] if min(matrices.shape[1:]) else np.zeros(len(matrices))
+
+    # Pseudo-inverses where A is wide or W tall (the pseudo-inverse G); inf where rank is lost.
+    a_largest, a_smallest = singular_values(A)
+    w_largest, w_smallest = singular_values(W)
+    singular = (a_smallest <= EPS * a_largest * max(A.shape[1:])) | (w_smallest <= EPS * w_largest * max(W.shape[1:]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a_inv, w_inv = 1.0 / a_smallest, 1.0 / w_smallest
+        P = U @ np.linalg.pinv(A)
+        Q = B @ np.linalg.pinv(W)
+    n = min(P.shape[1:])
+    if n == 0:
+        return np.zeros(len(configurations))
+    p, q_norm = norm(P), norm(Q)
+    eta = jacobian_ulps * EPS * norm(jacobians)
+    conditioning = a_largest * a_inv + w_largest * w_inv + 1.0
+    delta = eta * (a_inv * q_norm + p * a_inv * q_norm + p * w_inv + p * q_norm * w_inv)
+    delta += 8 * n * EPS * conditioning * p * q_norm
+    size = p * q_norm + delta  # >= ‖G‖ for either side
+    with np.errstate(invalid="ignore", over="ignore"):
+        tolerances = (2.0 * size) ** (1.0 - 1.0 / n) * delta ** (1.0 / n)
+    return np.where(singular | ~np.isfinite(tolerances), np.inf, tolerances)

@@ -27,7 +27,7 @@ from compiled_core import needs_core, path
 from pinrate.control.controller import Controller
 from pinrate.kinematics.targets import nearby_target
 from pinrate.theorem import spectral_radius_at
-from support import DATA
+from support import DATA, spectral_radius_tolerance
 
 pytestmark = needs_core
 
@@ -66,7 +66,13 @@ def both(robot: pinrate.Robot, *arguments: object, **keywords: object) -> tuple[
     return tuple(runs)
 
 
-def assert_same(python: pinrate.Trajectory, compiled: pinrate.Trajectory, *, bitwise: bool) -> None:
+def assert_same(
+    robot: pinrate.Robot, python: pinrate.Trajectory, compiled: pinrate.Trajectory, *, bitwise: bool
+) -> None:
+    """Bit for bit where both make the same operations; else q, rates and errors to 1e-12
+    (they differ by rounding, fed back through a contracting loop) and ρ within the bound of
+    support.spectral_radius_tolerance (recorded, not fed back; an eigenvalue of a nearly
+    defective G moves by a root of its rounding)."""
     assert compiled.reason == python.reason
     assert compiled.status == python.status
     assert compiled.detail == python.detail
@@ -75,8 +81,12 @@ def assert_same(python: pinrate.Trajectory, compiled: pinrate.Trajectory, *, bit
         ours, theirs = getattr(compiled, field), getattr(python, field)
         if bitwise:
             np.testing.assert_array_equal(ours, theirs, err_msg=f"{field} not bit-identical")
-        elif field == "spectral_radius":  # recorded, not fed back; an eigenvalue amplifies rounding
-            np.testing.assert_allclose(ours, theirs, rtol=1e-9, atol=1e-12, err_msg=field)
+        elif field == "spectral_radius":
+            np.testing.assert_array_equal(np.isinf(ours), np.isinf(theirs), err_msg="rho: where A or W is singular")
+            finite = np.isfinite(theirs)
+            tolerance = spectral_radius_tolerance(robot, python.partition, python.q[finite])
+            excess = np.abs(ours[finite] - theirs[finite]) - tolerance
+            assert not np.any(excess > 0), f"rho differs beyond its bound at steps {np.flatnonzero(finite)[excess > 0]}"
         else:
             np.testing.assert_allclose(ours, theirs, rtol=1e-12, atol=1e-12, err_msg=field)
 
@@ -95,7 +105,7 @@ def test_the_demo_runs_and_the_papers_simulations(name: str) -> None:
     settings = eval(str(REFERENCE[f"{name}/settings"]), {"inf": math.inf})  # a dict literal we wrote
     q0, target = REFERENCE[f"{name}/q0"], REFERENCE[f"{name}/target"]
     python, compiled = both(robot, q0, target, algorithm=algorithm, **settings)
-    assert_same(python, compiled, bitwise=bitwise(robot, algorithm, python.partition))
+    assert_same(robot, python, compiled, bitwise=bitwise(robot, algorithm, python.partition))
 
 
 @pytest.mark.parametrize("algorithm", pinrate.ALGORITHMS)
@@ -116,7 +126,7 @@ def test_random_targets_with_the_default_safety(name: str, algorithm: str, pytho
         with path("compiled"):
             compiled = pinrate.servo(robot, robot.home(), target, **settings)
         steps, handed_back = steps + compiled.steps, handed_back + len(python_steps)
-        assert_same(python, compiled, bitwise=bitwise(robot, algorithm))
+        assert_same(robot, python, compiled, bitwise=bitwise(robot, algorithm))
     assert handed_back < steps / 2, f"the core took only {steps - handed_back} of {steps} steps"
 
 
@@ -137,7 +147,7 @@ def test_limits_and_singularities_hand_steps_back(python_steps: list[int]) -> No
             compiled = pinrate.servo(robot, robot.home(), target, velocity_limits=0.8, max_steps=800)
         handed_back += len(python_steps)
         compiled_steps += compiled.steps - len(python_steps)
-        assert_same(python, compiled, bitwise=True)
+        assert_same(robot, python, compiled, bitwise=True)
         words |= set(compiled.status)
     assert {"rate limited", "saturated"} <= words
     assert words & {"joint limit", "decelerating", "wrist singularity", "near singularity", "singular"}
@@ -150,7 +160,7 @@ def test_a_run_longer_than_the_first_arrays() -> None:
     _, target = nearby_target(robot, pinrate.Partition.auto(robot), 0)
     python, compiled = both(robot, robot.home(), target, tol=1e-12, max_steps=5000, gain=0.2)
     assert compiled.steps > 2048
-    assert_same(python, compiled, bitwise=True)
+    assert_same(robot, python, compiled, bitwise=True)
 
 
 def test_a_prismatic_and_a_continuous_joint_and_a_sensor_mid_chain() -> None:
@@ -161,14 +171,15 @@ def test_a_prismatic_and_a_continuous_joint_and_a_sensor_mid_chain() -> None:
     for seed in range(3):
         _, target = nearby_target(robot, partition, seed)
         python, compiled = both(robot, robot.home(), target, partition=partition, algorithm="mca1", max_steps=400)
-        assert_same(python, compiled, bitwise=False)
+        assert_same(robot, python, compiled, bitwise=False)
 
 
 @pytest.mark.parametrize("name", ["ur5", "scara", "barker_arm", "spherical_6dof", "kinova"])
 def test_rho_maps_agree(name: str) -> None:
     """sample_convergence: the core's float closed forms against the batched numpy closed
-    forms (the same formulas, another order of a few roundings: an ill-conditioned A or W
-    amplifies them, so ρ agrees relatively); the verdicts agree away from ρ = 1."""
+    forms (the same formulas, another order of a few roundings, which an ill-conditioned A
+    or W amplifies): ρ within support.spectral_radius_tolerance, and the verdicts wherever
+    ρ is farther from 1 than that bound."""
     robot = pinrate.load(name)
     samples = {}
     for choice in ("python", "compiled"):
@@ -178,8 +189,10 @@ def test_rho_maps_agree(name: str) -> None:
     np.testing.assert_array_equal(samples["python"].q, samples["compiled"].q)
     np.testing.assert_array_equal(np.isinf(python), np.isinf(compiled))
     finite = np.isfinite(python)
-    np.testing.assert_allclose(compiled[finite], python[finite], rtol=1e-9, atol=1e-12)
-    clear = np.abs(python - 1.0) > 1e-6
+    tolerance = spectral_radius_tolerance(robot, pinrate.Partition.auto(robot), samples["python"].q[finite])
+    assert np.all(np.abs(compiled[finite] - python[finite]) <= tolerance)
+    clear = ~finite  # the verdict where rho is known farther from 1 than its bound
+    clear[finite] = np.abs(python[finite] - 1.0) > tolerance
     np.testing.assert_array_equal((compiled < 1.0)[clear], (python < 1.0)[clear])
     with path("compiled"):
         assert pinrate.backend().name == "compiled"

@@ -171,6 +171,31 @@ def test_decelerate_slows_then_halts_before_the_elbow_singularity_and_lets_the_a
     np.testing.assert_allclose(back.joint_rates, unscaled.step(q, -outward).joint_rates, atol=1e-12)
 
 
+def test_decelerate_halts_at_the_same_step_whatever_the_rounding() -> None:
+    """The halt is a decision with a margin (singularity.HALT_MARGIN), not a race of c toward
+    singular_threshold that rounding ends: starts a few ulps apart (what another CPU or numpy
+    makes of the same start) halt at the same step, and soon. Without the margin they halted
+    after 216 to 222 steps here, or never (4,000 steps) on another machine."""
+    halted_at = set()
+    for offset in (0.0, 1e-15, -1e-15, 3e-15, -1e-14, 1e-13):
+        robot, q = ur5_at(elbow_joint=0.4)
+        q = q + offset
+        controller = Controller(robot, dt=0.002, velocity_limits=np.inf)
+        outward = np.linalg.svd(robot.jacobian(q))[0][:, -1]
+        outward *= 0.1 / np.linalg.norm(outward[:3])
+        if controller.step(q, outward).joint_rates[2] > 0:
+            outward = -outward
+        for number in range(1000):
+            step = controller.step(q, outward)
+            if step.status is Status.HALT_FOR_SINGULARITY:
+                halted_at.add(number)
+                break
+            q = step.q
+        else:
+            pytest.fail(f"no halt in 1000 steps from an offset of {offset}")
+    assert len(halted_at) == 1, f"the halt step depends on rounding: {sorted(halted_at)}"
+
+
 def test_freeze_holds_the_joints_that_carry_the_lost_direction() -> None:
     robot, q = ur5_at(elbow_joint=0.02)
     controller = Controller(robot, singularity="freeze", **UNLIMITED)

@@ -234,3 +234,58 @@ def test_upper_arm_axes_are_the_robots_link_2_axes() -> None:
         across = (elbow - shoulder) - ((elbow - shoulder) @ axis) * axis
         np.testing.assert_allclose(x2, across / np.linalg.norm(across), atol=1e-12)
         np.testing.assert_allclose(abs(float(np.cross(x2, y2) @ axis)), 1.0, atol=1e-12)
+
+
+# ---------------------------------------------------------------------- appendix B
+def appendix_a_rotations(q: np.ndarray, alpha3: float) -> list[np.ndarray]:
+    """R_0^1 .. R_5^6: the upper-left 3x3 of Barker's eq. A1-A6, written from the paper."""
+    C1, S1, C2, S2, C3, S3, C4, S4, C5, S5, C6, S6 = (f(angle) for angle in q for f in (math.cos, math.sin))
+    SAL3, CAL3 = math.sin(alpha3), math.cos(alpha3)
+    return [
+        np.array([[-C1, 0.0, -S1], [-S1, 0.0, C1], [0.0, 1.0, 0.0]]),  # A1
+        np.array([[-S2, -C2, 0.0], [C2, -S2, 0.0], [0.0, 0.0, 1.0]]),  # A2
+        np.array([[-S3, -C3 * CAL3, C3 * SAL3], [C3, -S3 * CAL3, S3 * SAL3], [0.0, SAL3, CAL3]]),  # A3
+        np.array([[-C4, 0.0, -S4], [-S4, 0.0, C4], [0.0, 1.0, 0.0]]),  # A4
+        np.array([[-C5, 0.0, -S5], [-S5, 0.0, C5], [0.0, 1.0, 0.0]]),  # A5
+        np.array([[C6, -S6, 0.0], [S6, C6, 0.0], [0.0, 0.0, 1.0]]),  # A6
+    ]
+
+
+@pytest.mark.parametrize("lengths", [{}, OFF_NOMINAL])
+def test_hand_to_base_b1_b24(lengths: dict[str, float]) -> None:
+    # Eq. B11 prints P2 = -S23 CAL3; the first column of R_1^2 R_2^3 (eq. A2 A3) is
+    # (-C23, -S23, 0): P2 = -S23. With it, B4 is that product and L (B16-B24) the product
+    # of all six, i.e. the robot's hand rotation; with the printed P2 neither holds.
+    alpha3 = (pinrate.robots.parameters("barker_arm") | lengths)["alpha3"]
+    robot = pinrate.robots.barker_arm(**lengths)
+    for q in robot.sample_configurations(20, 26):
+        r01, r12, r23, r34, r45, r56 = appendix_a_rotations(q, alpha3)
+        np.testing.assert_allclose(barker.rotation_1_3(q, lengths), r12 @ r23, atol=1e-14)
+        product = r01 @ r12 @ r23 @ r34 @ r45 @ r56
+        np.testing.assert_allclose(barker.hand_to_base(q, lengths), product, atol=1e-14)
+        np.testing.assert_allclose(product, robot.frame_pose(q, "hand")[:3, :3], atol=1e-12)
+        error = abs(math.sin(q[1] + q[2])) * (1 - math.cos(alpha3))  # |P2 printed - P2|
+        b4_printed = barker.rotation_1_3(q, lengths, as_printed=True)
+        assert np.abs(b4_printed - r12 @ r23).max() == pytest.approx(error, abs=1e-12)
+    derived, printed, b4 = barker.hand_to_base_errors(count=50, **lengths)
+    assert derived < 1e-12
+    assert printed > 0.5 and b4 > 0.9 * (1 - math.cos(alpha3))
+
+
+def test_upper_arm_components_b27_b29() -> None:
+    # B27: (TVEL)_X2, (TVEL)_Y2 are rows 1-2 of R_2^1 R_1^0 (the transposes of eq. A2, A1)
+    # times TVEL^. The printed B28-B29, bracket mended or not, differ from them; with the
+    # bracket mended they differ by exactly the sign of the S1 TVEL(2) term.
+    rng = np.random.default_rng(27)
+    robot = pinrate.robots.barker_arm()
+    for q in robot.sample_configurations(20, 28):
+        r01, r12, *_ = appendix_a_rotations(q, math.pi / 2)
+        tvel = rng.normal(size=3)
+        expected = (r12.T @ r01.T @ tvel)[:2]
+        np.testing.assert_allclose(barker.upper_arm_components(q, tvel), expected, atol=1e-14)
+        mended = np.array(barker.upper_arm_components_as_printed(q, tvel, bracket_mended=True))
+        sign_term = 2 * math.sin(q[0]) * tvel[1] * np.array([math.sin(q[1]), math.cos(q[1])])
+        np.testing.assert_allclose(expected - mended, sign_term, atol=1e-14)
+    derived, printed, bracket_only = barker.upper_arm_component_errors(count=50)
+    assert derived < 1e-12
+    assert printed > 0.5 and bracket_only > 0.5

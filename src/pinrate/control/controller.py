@@ -75,6 +75,7 @@ from .singularity import (
     check_thresholds,
     conditioning,
     deceleration,
+    halts,
     measured_blocks,
     wrist_pair,
 )
@@ -1218,7 +1219,8 @@ class Controller:
     ) -> tuple[float, Status, str]:
         """(scale, status, detail) of a step at c = ``value``, judged one step ahead: unscaled
         when it raises c (without crossing a singularity); a halt when the unscaled step
-        would cross a singularity or carry c under singular_threshold; else scaled by
+        would cross a singularity or carry c under singular_threshold (with the margin of
+        :func:`~pinrate.control.singularity.halts`); else scaled by
         (c - singular) / (slow - singular), c the lesser of now and ahead."""
         ahead, crossed = self._lookahead(observation, rates, columns)
         where = f"block {block} near singular (c = {min(value, ahead):.2g})"
@@ -1227,7 +1229,7 @@ class Controller:
             if value >= self.slow_threshold:
                 return 1.0, Status.OK, ""
             return 1.0, Status.NEAR_SINGULARITY, f"{where}: the step raises c, executed unscaled"
-        if crossed or ahead < self.singular_threshold:
+        if crossed or halts(ahead, self.singular_threshold, self.slow_threshold):
             return 0.0, Status.HALT_FOR_SINGULARITY, f"{where}: halted, the step would make it singular"
         scale = deceleration(min(value, ahead), self.singular_threshold, self.slow_threshold)
         if scale >= 1.0:

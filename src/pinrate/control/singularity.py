@@ -10,7 +10,9 @@ least c is under ``slow_threshold``; there, ``singularity=`` decides:
 
 * ``"decelerate"`` (default): the generalized inverse's rates, scaled by
   s = (c - singular_threshold) / (slow_threshold - singular_threshold) when the step would
-  lower c, and 0 (a halt) when the unscaled step would carry c under ``singular_threshold``.
+  lower c, and 0 (a halt) when the unscaled step would carry c under ``singular_threshold``
+  plus a margin of :data:`HALT_MARGIN` of the band, so that the approach halts in finitely
+  many steps on every machine.
   A step that raises c is executed unscaled: the way out is always open (MoveIt Servo's
   look-ahead, on the block actually inverted);
 * ``"generalized_inverse"``: Barker's M* (eq. 38, 44, 60) — each inversion by the
@@ -73,6 +75,11 @@ SLOW_THRESHOLD = 0.02
 SINGULAR_THRESHOLD = 0.005
 """c treated as singular (κ = 200): a decelerating step halts before it, the generalized
 inverse cuts singular values under this fraction of σ_1."""
+
+HALT_MARGIN = 0.01
+"""A decelerating step halts when its look-ahead c is within this share of the band
+(slow_threshold - singular_threshold) above singular_threshold, where its scale would be
+under 1 %: the approach ends in a halt in finitely many steps (:func:`halts`)."""
 
 MAX_DAMPING = 0.02
 """λ of ``adaptive_dls`` at c = 0, relative to the block's largest singular value: the
@@ -195,6 +202,16 @@ def adaptive_damping(value: float, slow_threshold: float) -> float:
 def deceleration(value: float, singular_threshold: float, slow_threshold: float) -> float:
     """s = (c - singular) / (slow - singular), clipped to [0, 1]: the command's scale at c."""
     return min(1.0, max(0.0, (value - singular_threshold) / (slow_threshold - singular_threshold)))
+
+
+def halts(ahead: float, singular_threshold: float, slow_threshold: float) -> bool:
+    """Whether a decelerating step whose look-ahead c is ``ahead`` halts: c would come within
+    :data:`HALT_MARGIN` of the band (slow - singular) above ``singular_threshold``.
+
+    Without the margin the decision never comes on its own: with the scale s linear in c,
+    c falls by about s · (its unscaled drop) per step, so it nears singular_threshold
+    geometrically and only rounding (a 1e-17 of another CPU or numpy) carried it under."""
+    return ahead < singular_threshold + HALT_MARGIN * (slow_threshold - singular_threshold)
 
 
 @dataclass(frozen=True)

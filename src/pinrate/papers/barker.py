@@ -52,6 +52,18 @@ OCR garbles and misprints settled (each derived again and tested in tests/papers
 * eq. 47 prints "z3 theta1 + z1 theta5": it is RVEL~ = z3 theta4 + z4 theta5 + z5 theta6
   (eq. C2); eq. 59 prints "-S4 D6": it is -S4 D5 (eq. 50); "theta14" (eq. 60), "theta_l4"
   (eq. 63) and the double dots of eq. 61-62 are theta4 and single dots.
+* eq. B11 prints P2 = -S23 CAL3: it is P2 = -S23. Derivation: with R_1^2, R_2^3 the rotations
+  of eq. A2, A3, the first column of R_1^2 R_2^3 is (S2 S3 - C2 C3, -(C2 S3 + S2 C3), 0) =
+  (-C23, -S23, 0) = (P1, P2, 0) of eq. B4, whose other columns (-P2 CAL3, P1 CAL3, SAL3) and
+  (P2 SAL3, -P1 SAL3, CAL3) need the same P2 = -S23. With the printed P2 (0 on the nominal
+  arm, CAL3 = 0) the hand-to-base rotation L of eq. B16-B24 is not a rotation of the arm.
+* eq. B28-B29 print (TVEL)_X2 = S2 [C1 TVEL(1) - S1 TVEL(2) + C2 TVEL(3)] and (TVEL)_Y2 =
+  C2 [C1 TVEL(1) - S1 TVEL(2) - S2 TVEL(3)]. Rows 1 and 2 of R_2^1 R_1^0 (eq. B25-B27) are
+  -S2 (-C1, -S1, 0) + C2 (0, 0, 1) = (S2 C1, S2 S1, C2) and -C2 (-C1, -S1, 0) - S2 (0, 0, 1) =
+  (C2 C1, C2 S1, -S2): (TVEL)_X2 = S2 (C1 TVEL(1) + S1 TVEL(2)) + C2 TVEL(3) and (TVEL)_Y2 =
+  C2 (C1 TVEL(1) + S1 TVEL(2)) - S2 TVEL(3). The bracket closes after the TVEL(2) term, and
+  that term's sign is + (the printed - is a second misprint, not a consequence of the
+  bracket: mending the bracket alone still gives S2 (C1 TVEL(1) - S1 TVEL(2)) + C2 TVEL(3)).
 
 What the reduction is, measured against the Moore-Penrose solution of eq. 38:
 
@@ -85,6 +97,7 @@ import numpy as np
 
 from .. import robots
 from ..control.controller import Controller, Step
+from ..errors import InputError
 from ..kinematics.manipulator import Robot
 
 WRIST_SINGULAR_Q = np.array([0.3, 0.4, 0.7, 0.1, 0.0, 0.2])
@@ -319,6 +332,91 @@ def wrist_rule_rates(
     return np.array([theta4, theta5, theta6])
 
 
+# ---------------------------------------------------------------------- appendix B, hand to base
+def _p2(q: np.ndarray, alpha3: float, as_printed: bool) -> float:
+    """P2 of eq. B11: -S23 (derived, module docstring), or -S23 CAL3 as printed."""
+    s23 = math.sin(float(q[1]) + float(q[2]))
+    return -s23 * math.cos(alpha3) if as_printed else -s23
+
+
+def rotation_1_3(
+    q: np.ndarray, parameters: Mapping[str, float] | None = None, *, as_printed: bool = False
+) -> np.ndarray:
+    """R_1^2 R_2^3 of eq. B4 from P1 = -C23 (eq. B10) and P2 (eq. B11: -S23 derived, -S23 CAL3
+    with ``as_printed``): frame 3's axes in frame 1's, dimensionless."""
+    alpha3 = _parameters(parameters)["alpha3"]
+    SAL3, CAL3 = math.sin(alpha3), math.cos(alpha3)
+    P1, P2 = -math.cos(float(q[1]) + float(q[2])), _p2(q, alpha3, as_printed)
+    return np.array([[P1, -P2 * CAL3, P2 * SAL3], [P2, P1 * CAL3, -P1 * SAL3], [0.0, SAL3, CAL3]])
+
+
+def hand_to_base(
+    q: np.ndarray, parameters: Mapping[str, float] | None = None, *, as_printed: bool = False
+) -> np.ndarray:
+    """L = R_0^6 of eq. B2-B24: the hand's axes in base axes, so TVEL^ = L TVEL and
+    RVEL^ = L RVEL (eq. B1). Entries as printed in eq. B16-B24 from Q1..Q4 (eq. B6-B9),
+    P1, P2 (eq. B10-B11; P2 = -S23 derived, -S23 CAL3 with ``as_printed``) and T1..T4
+    (eq. B12-B15); dimensionless."""
+    alpha3 = _parameters(parameters)["alpha3"]
+    SAL3, CAL3 = math.sin(alpha3), math.cos(alpha3)
+    t1, _, _, t4, t5, t6 = (float(angle) for angle in q)
+    C1, S1 = math.cos(t1), math.sin(t1)
+    C4, S4, C5, S5, C6, S6 = math.cos(t4), math.sin(t4), math.cos(t5), math.sin(t5), math.cos(t6), math.sin(t6)
+    Q1 = C4 * C5 * C6 - S4 * S6  # eq. B6
+    Q2 = S4 * C5 * C6 + C4 * S6  # eq. B7
+    Q3 = -C4 * C5 * S6 - S4 * C6  # eq. B8
+    Q4 = -S4 * C5 * S6 + C4 * C6  # eq. B9
+    P1 = -math.cos(float(q[1]) + float(q[2]))  # eq. B10
+    P2 = _p2(q, alpha3, as_printed)  # eq. B11
+    T1 = C1 * CAL3 * P2 - S1 * SAL3  # eq. B12
+    T2 = -C1 * P2 * SAL3 - S1 * CAL3  # eq. B13
+    T3 = S1 * CAL3 * P2 + C1 * SAL3  # eq. B14
+    T4 = -S1 * P2 * SAL3 + C1 * CAL3  # eq. B15
+    return np.array(
+        [
+            [
+                -C1 * P1 * Q1 + T1 * Q2 - T2 * S5 * C6,  # eq. B16
+                -C1 * P1 * Q3 + T1 * Q4 + T2 * S5 * S6,  # eq. B19
+                -C1 * P1 * C4 * S5 + T1 * S4 * S5 + T2 * C5,  # eq. B22
+            ],
+            [
+                -S1 * P1 * Q1 + T3 * Q2 - T4 * S5 * C6,  # eq. B17
+                -S1 * P1 * Q3 + T3 * Q4 + T4 * S5 * S6,  # eq. B20
+                -S1 * P1 * C4 * S5 + T3 * S4 * S5 + T4 * C5,  # eq. B23
+            ],
+            [
+                P2 * Q1 + P1 * CAL3 * Q2 + P1 * SAL3 * S5 * C6,  # eq. B18
+                P2 * Q3 + P1 * CAL3 * Q4 - P1 * SAL3 * S5 * S6,  # eq. B21
+                P2 * C4 * S5 + P1 * CAL3 * S4 * S5 - P1 * SAL3 * C5,  # eq. B24
+            ],
+        ]
+    )
+
+
+def upper_arm_components(q: np.ndarray, tvel: np.ndarray) -> tuple[float, float]:
+    """((TVEL)_X2, (TVEL)_Y2) of a base-axes TVEL^ (m/s): eq. B28-B29 as derived from eq. B27
+    (module docstring), S2 (C1 TVEL(1) + S1 TVEL(2)) + C2 TVEL(3) and
+    C2 (C1 TVEL(1) + S1 TVEL(2)) - S2 TVEL(3)."""
+    C1, S1, C2, S2 = math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1])
+    T1, T2, T3 = (float(value) for value in tvel)
+    radial = C1 * T1 + S1 * T2
+    return S2 * radial + C2 * T3, C2 * radial - S2 * T3
+
+
+def upper_arm_components_as_printed(
+    q: np.ndarray, tvel: np.ndarray, *, bracket_mended: bool = False
+) -> tuple[float, float]:
+    """Eq. B28-B29 as the OCR'd paper prints them, S2 [C1 TVEL(1) - S1 TVEL(2) + C2 TVEL(3)] and
+    C2 [C1 TVEL(1) - S1 TVEL(2) - S2 TVEL(3)]; with ``bracket_mended`` the bracket closed after
+    the TVEL(2) term but its printed sign kept: S2 (C1 TVEL(1) - S1 TVEL(2)) + C2 TVEL(3) and
+    C2 (C1 TVEL(1) - S1 TVEL(2)) - S2 TVEL(3) (m/s)."""
+    C1, S1, C2, S2 = math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1])
+    T1, T2, T3 = (float(value) for value in tvel)
+    if bracket_mended:
+        return S2 * (C1 * T1 - S1 * T2) + C2 * T3, C2 * (C1 * T1 - S1 * T2) - S2 * T3
+    return S2 * (C1 * T1 - S1 * T2 + C2 * T3), C2 * (C1 * T1 - S1 * T2 - S2 * T3)
+
+
 # ---------------------------------------------------------------------- pinrate against the closed forms
 def base_axes(robot: Robot, q: np.ndarray, twist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(TVEL^, RVEL^): a hand-axes twist (m/s, rad/s) in base axes (eq. 20)."""
@@ -468,7 +566,10 @@ def _wrist_step(rule: str, q: np.ndarray, twist: np.ndarray) -> tuple[Step, np.n
     q = q.copy()
     if rule == "last_then_first":
         probe = unlimited_controller(robot, "mca2", wrist="hold_first").step(q, twist)
-        lower, upper = robot.joint_limits("theta6")
+        limits = robot.joint_limits("theta6")
+        if limits is None:
+            raise InputError("eq. 63 (last_then_first) needs finite position limits on theta6")
+        lower, upper = limits
         q[5] = upper if probe.joint_rates[5] > 0 else lower
     controller = Controller(
         robot, algorithm="mca2", singularity="generalized_inverse", wrist=rule, velocity_limits=np.inf
@@ -524,13 +625,57 @@ def wrist_rule_deviations() -> dict[str, float]:
 
 def upper_arm_axes(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(X2, Y2) in base axes: the first two rows of R_2^1 R_1^0 (eq. B25-B27). The printed
-    B28-B29 misplace a bracket: (TVEL)_X2 = S2 (C1 TVEL(1) + S1 TVEL(2)) + C2 TVEL(3) and
+    B28-B29 misplace a bracket and flip the sign of the S1 TVEL(2) term (module docstring):
+    (TVEL)_X2 = S2 (C1 TVEL(1) + S1 TVEL(2)) + C2 TVEL(3) and
     (TVEL)_Y2 = C2 (C1 TVEL(1) + S1 TVEL(2)) - S2 TVEL(3)."""
     C1, S1, C2, S2 = math.cos(q[0]), math.sin(q[0]), math.cos(q[1]), math.sin(q[1])
     r10 = np.array([[-C1, -S1, 0.0], [0.0, 0.0, 1.0], [-S1, C1, 0.0]])  # eq. B25
     r21 = np.array([[-S2, C2, 0.0], [-C2, -S2, 0.0], [0.0, 0.0, 1.0]])  # eq. B26
     x2, y2, _ = r21 @ r10
     return x2, y2
+
+
+def hand_to_base_errors(count: int = 100, **lengths: float) -> tuple[float, float, float]:
+    """Eq. B1-B24 against the robot, over random q: (max |L - R_hand| with P2 = -S23, the same
+    with P2 as printed, max |B4 as printed - B4| entrywise), R_hand the robot's hand rotation
+    (``robot.frame_pose(q, "hand")``); all dimensionless."""
+    robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
+    derived = printed = b4 = 0.0
+    for q in robot.sample_configurations(count, 21):
+        hand = robot.frame_pose(q, "hand")[:3, :3]
+        derived = max(derived, float(np.abs(hand_to_base(q, lengths) - hand).max()))
+        printed = max(printed, float(np.abs(hand_to_base(q, lengths, as_printed=True) - hand).max()))
+        b4 = max(b4, float(np.abs(rotation_1_3(q, lengths, as_printed=True) - rotation_1_3(q, lengths)).max()))
+    return derived, printed, b4
+
+
+def upper_arm_component_errors(count: int = 100) -> tuple[float, float, float]:
+    """Eq. B28-B29 against the robot, over random q and unit base-axes TVEL^: max |error| (m/s
+    per m/s) of (derived, as printed, printed with only the bracket mended), the robot's
+    components being TVEL^ . X2 and TVEL^ . Y2 with X2 the unit vector from the shoulder
+    (joint theta2) to the elbow (joint theta3) across the theta2 axis and Y2 = z1 x X2, z1
+    the robot's theta2 rotation axis in base axes (R_hand times column 2 of J's angular rows)."""
+    robot = robots.barker_arm()
+    generator = np.random.default_rng(22)
+    worst = [0.0, 0.0, 0.0]
+    for q in robot.sample_configurations(count, 23):
+        hand = robot.frame_pose(q, "hand")[:3, :3]
+        z1 = hand @ robot.jacobian(q)[3:, 1]
+        shoulder, elbow = (robot.frame_pose(q, frame)[:3, 3] for frame in ("theta2", "theta3"))
+        across = (elbow - shoulder) - ((elbow - shoulder) @ z1) * z1
+        x2 = across / np.linalg.norm(across)
+        y2 = np.cross(z1, x2)
+        tvel = generator.normal(size=3)
+        tvel /= np.linalg.norm(tvel)
+        expected = np.array([tvel @ x2, tvel @ y2])
+        candidates = (
+            upper_arm_components(q, tvel),
+            upper_arm_components_as_printed(q, tvel),
+            upper_arm_components_as_printed(q, tvel, bracket_mended=True),
+        )
+        for i, found in enumerate(candidates):
+            worst[i] = max(worst[i], float(np.abs(np.array(found) - expected).max()))
+    return worst[0], worst[1], worst[2]
 
 
 ELBOW_CASES = ((0.3, 0.4), (-1.1, 1.2), (2.0, -0.7))
@@ -601,6 +746,8 @@ __all__ = [
     "elbow_bends",
     "generalized_inverse_deviation",
     "generalized_inverse_rates",
+    "hand_to_base",
+    "hand_to_base_errors",
     "hand_twist",
     "m_deviation",
     "printed_arm_rates_error",
@@ -608,9 +755,13 @@ __all__ = [
     "reduction_2x2",
     "reduction_at_theta1_zero",
     "reduction_deviation",
+    "rotation_1_3",
     "singular_case",
     "unlimited_controller",
     "upper_arm_axes",
+    "upper_arm_component_errors",
+    "upper_arm_components",
+    "upper_arm_components_as_printed",
     "wrist_centre_from_shoulder",
     "wrist_generalized_inverse_deviation",
     "wrist_rates",

@@ -15,11 +15,39 @@ Misprints found in the OCR'd text (each derived again and tested):
   0, l C5 / (d3 + l C5) and l K / (d3 C2 + l K) with K = C2 C5 - S2 C4 S5, so eq. 72
   (K > 0) is sufficient (the exact condition is K > -d3 C2 / (2 l)) and eq. 73 becomes
   C5 > -d3 / (2 l); both hold throughout when d3 > 2 l and -90° < theta5 < 90°.
+* S&K eq. 71, entry (3, 3): printed l (d3 S2 C4 S5 + l S2 C4 S5 C5) / det(A); the printed
+  eq. 70 gives l (-d3 S2 C4 S5 + l S2 C4 S5 C5) / det(A). Derivation: with the printed
+  column 2 (0, d3 - l C5, -l C4 S5) A is lower triangular, det(A) = a11 (d3 - l C5) (the
+  printed det(A)), a11 = d3 C2 + l C2 C5 - l S2 C4 S5; U's third row is (-S2, 0, 0), so row
+  3 of G = U A^-1 B W^-1 is -S2 / a11 times row 1 of B W^-1, which is (0, l C5, l C4 S5)
+  (solve x W = (l C4 S5, l S4 C5, 0)). Hence G(3, 3) = -l S2 C4 S5 / a11
+  = l (-d3 S2 C4 S5 + l S2 C4 S5 C5) / det(A), while G(3, 2) = -l S2 C5 / a11 is printed
+  right. Every other entry of eq. 71 is U A^-1 B W^-1 of the printed eq. 70
+  (:func:`printed_eq71_errors`); the OCR's "-l C4 - S5" at (3, 2) of eq. 70 does not
+  enter G (U's third column is 0 and A is lower triangular: U A^-1 uses A's leading 2x2).
 * Fig. 6: the printed polar poses cannot give the printed λ under any reading tried
   (TCP or wrist point, absolute or relative orientation); the simulation is rerun from
   poses built to have the printed λ values.
 * Fig. 9(b): at the printed target (0.95, -0.06, -50°) G is next to its pole
   (l2 S2 + l3 S23 = 0) and very sensitive; the printed start λ 1.62 is reached at -49.75°.
+
+What two of the paper's statements measure (read from the text, computed as read):
+
+* S&K §5.3's "at least within 50 percent of the work volume convergence always exists"
+  is about the (theta2, theta5) square (-90°, 90°)² with theta4 free ("always": for every
+  theta4): K = C2 C5 - S2 C4 S5 is affine in C4, so eq. 72 holds for every theta4 iff
+  C2 C5 > |S2 S5|, i.e. cos(|theta2| + |theta5|) > 0, |theta2| + |theta5| < 90°: exactly
+  half the square. At one theta4 with C4 = ±1 it is |theta2 ± theta5| < 90°, 3/4 of it
+  (the paper's "much larger" effective work volume when C4 does not take both values).
+* Fig. 6(b), "the convergence condition is not fulfilled and the trajectory diverges":
+  |λ| = 1.5 > 1 at the start (the target's -0.9 is inside). The dead-beat MCA2 iteration
+  (the Theorem's setting) first moves away (the servo's divergence stop fires at step 4),
+  then, without joint limits, crosses G's pole d2 + l C3 = 0, takes d2 through 0 and
+  converges on the mirror branch d2 < 0 (theta1 - 180°, theta3 + 180°: the same pose),
+  which the robot's stroke (d2 >= 0.05 m) and the paper's d2 > 0 exclude; with the limits
+  held it stops at d2 = 0.05 m, theta3 = 180° short of the target (:func:`fig6b_continued`).
+  So the figure's outcome holds on the robot, while |λ| > 1 at the start alone does not
+  make the iteration diverge: the Theorem's condition is sufficient, not necessary.
 """
 
 from __future__ import annotations
@@ -32,12 +60,14 @@ import numpy as np
 
 from .. import robots
 from ..analysis import design
+from ..control.commands import PoseGoal
+from ..control.controller import Controller, error_norms
 from ..control.servo_loop import servo
 from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..solvers.rates import joint_rates
-from ..theorem import convergence, sample_convergence
+from ..theorem import convergence, convergence_from_blocks, sample_convergence, spectral_radius_at
 from . import barker
 from .barker import barker_singular_configurations
 
@@ -255,12 +285,99 @@ def spherical_6dof_deviations(count: int = 300) -> tuple[float, float]:
     return worst_jacobian, worst_eigen
 
 
-def spherical_6dof_fractions(count: int = 20000) -> tuple[float, float, bool]:
-    """(share with ρ < 1, share with K > 0 (eq. 72), whether every K > 0 sample has ρ < 1)."""
-    sample = sample_convergence(robots.spherical_6dof(), count, rng=12)
-    q = sample.q
-    K = np.cos(q[:, 1]) * np.cos(q[:, 4]) - np.sin(q[:, 1]) * np.cos(q[:, 3]) * np.sin(q[:, 4])
-    return sample.fraction, float(np.mean(K > 0)), bool((sample.spectral_radius[K > 0] < 1).all())
+def spherical_6dof_printed_jacobian(q: np.ndarray, l: float) -> np.ndarray:  # noqa: E741
+    """Eq. 70 as printed (sensor axes; m, rad): column 2 (0, d3 - l C5, -l C4 S5), the OCR's
+    "-l C4 - S5" read as -l C4 S5 (it does not enter G, module docstring)."""
+    d3, t4, t5 = (float(value) for value in q[2:5])
+    printed = spherical_6dof_jacobian(q, l)
+    printed[:3, 1] = [0.0, d3 - l * math.cos(t5), -l * math.cos(t4) * math.sin(t5)]
+    return printed
+
+
+def spherical_6dof_printed_G(q: np.ndarray, l: float, *, d3_sign_33: float = 1.0) -> np.ndarray:  # noqa: E741
+    """Eq. 71 as printed: G = (l / det A) [...] with the printed det(A) = d3² C2 - d3 l S2 C4 S5
+    - l² C2 C5² + l² S2 C4 S5 C5 (dimensionless). ``d3_sign_33 = -1`` changes the sign of the d3
+    term of entry (3, 3), the correction (module docstring)."""
+    _, t2, d3, t4, t5, _ = q
+    C2, S2, C4, S4, C5, S5 = (math.cos(t2), math.sin(t2), math.cos(t4), math.sin(t4), math.cos(t5), math.sin(t5))
+    det = d3 * d3 * C2 - d3 * l * S2 * C4 * S5 - l * l * C2 * C5 * C5 + l * l * S2 * C4 * S5 * C5
+    entries = np.array(
+        [
+            [
+                -d3 * C2 * C5 - l * C2 * C5 * C5 + l * S2 * C4 * S5 * C5,
+                l * S2 * S4 * S5 * C5,
+                d3 * C2 * S4 * S5 + l * C2 * S4 * S5 * C5,
+            ],
+            [0.0, d3 * C2 * C5 - l * C2 * C5 * C5, d3 * C2 * C4 * S5 - l * C2 * C4 * S5 * C5],
+            [0.0, -d3 * S2 * C5 + l * S2 * C5 * C5, d3_sign_33 * d3 * S2 * C4 * S5 + l * S2 * C4 * S5 * C5],
+        ]
+    )
+    return l / det * entries
+
+
+def printed_eq71_errors(count: int = 300) -> tuple[float, float, float]:
+    """Eq. 71 against G = U A^-1 B W^-1 of the printed eq. 70 (pinrate's
+    :func:`convergence_from_blocks` on its blocks), over random q of the six-DOF robot, each
+    error relative to max(1, |G|): (max over the entries other than (3, 3), max at (3, 3) as
+    printed, max at (3, 3) with its d3 term's sign changed)."""
+    robot = robots.spherical_6dof()
+    l = 0.1  # noqa: E741
+    others = printed = corrected = 0.0
+    mask = np.ones((3, 3), dtype=bool)
+    mask[2, 2] = False
+    for q in robot.sample_configurations(count, 24):
+        J = spherical_6dof_printed_jacobian(q, l)
+        G = convergence_from_blocks(J[:3, :3], J[:3, 3:], J[3:, :3], J[3:, 3:]).G
+        scale = max(1.0, float(np.abs(G).max()))
+        as_printed = spherical_6dof_printed_G(q, l)
+        others = max(others, float(np.abs(G - as_printed)[mask].max()) / scale)
+        printed = max(printed, abs(float(G[2, 2] - as_printed[2, 2])) / scale)
+        corrected = max(corrected, abs(float(G[2, 2] - spherical_6dof_printed_G(q, l, d3_sign_33=-1.0)[2, 2])) / scale)
+    return others, printed, corrected
+
+
+@dataclass(frozen=True)
+class WorkVolume:
+    """Shares of the six-DOF robot's (theta2, theta5) square where eq. 72 holds (§5.3)."""
+
+    samples: int
+    every_theta4: float  # eq. 72 holds for every theta4 (the paper's "always"); exactly 1/2
+    theta4_zero: float  # eq. 72 holds at theta4 = 0 (C4 = 1); exactly 3/4
+    sufficient: bool  # pinrate's ρ < 1 wherever eq. 72 holds for every theta4 (three theta4 each)
+
+
+def eq72_K(theta2: np.ndarray, theta4: np.ndarray, theta5: np.ndarray) -> np.ndarray:
+    """K = C2 C5 - S2 C4 S5 of eq. 72 (rad in, dimensionless out)."""
+    return np.cos(theta2) * np.cos(theta5) - np.sin(theta2) * np.cos(theta4) * np.sin(theta5)
+
+
+def spherical_6dof_work_volume(count: int = 20000, seed: int = 12) -> WorkVolume:
+    """§5.3's "at least within 50 percent of the work volume convergence always exists".
+
+    ``count`` configurations drawn uniformly in the robot's joint limits (theta2, theta5 in
+    (-90°, 90°), the paper's assumptions C2 > 0 and -90° < theta5 < 90°; d3 in [0.3, 0.8] m
+    > 2 l). Eq. 72 holds for every theta4 where K > 0 at C4 = +1 and at C4 = -1 (K is affine in
+    C4): the share of those samples estimates the area of |theta2| + |theta5| < 90° over the
+    square, 1/2. ``sufficient``: at each such sample pinrate's ρ (:func:`spectral_radius_at`,
+    the corrected eq. 70) is below 1 at the sample's theta4 and at theta4 = 0 and 180°.
+    """
+    robot = robots.spherical_6dof()
+    q = robot.sample_configurations(count, seed)
+    theta2, theta5 = q[:, 1], q[:, 4]
+    every = (eq72_K(theta2, np.zeros(count), theta5) > 0) & (eq72_K(theta2, np.full(count, math.pi), theta5) > 0)
+    region = q[every]
+    variants = [region]
+    for theta4 in (0.0, math.pi):
+        turned = region.copy()
+        robot.set_joint_values(turned, "theta4", np.full(len(turned), theta4))
+        variants.append(turned)
+    radii = spectral_radius_at(robot, np.concatenate(variants))
+    return WorkVolume(
+        samples=count,
+        every_theta4=float(np.mean(every)),
+        theta4_zero=float(np.mean(eq72_K(theta2, np.zeros(count), theta5) > 0)),
+        sufficient=bool((radii < 1).all()),
+    )
 
 
 # ---------------------------------------------------------------------- Barker
@@ -300,31 +417,48 @@ def barker_singular(q: np.ndarray) -> bool:
     return False
 
 
-def barker_wrist_deviation(count: int = 200, **lengths: float) -> float:
-    """max residual of eq. 49-51 for pinrate's wrist rates (D1..D5 of eq. 52-56)."""
+RateSolver = Callable[[Robot, np.ndarray, np.ndarray], np.ndarray]
+"""(robot, q, sensor-frame twist) -> joint rates (nv,): the solver a check is run on."""
+
+
+def _mca2_rates(robot: Robot, q: np.ndarray, twist: np.ndarray) -> np.ndarray:
+    return joint_rates(robot, q, twist, algorithm="mca2")
+
+
+def barker_wrist_deviation(count: int = 200, *, solver: RateSolver | None = None, **lengths: float) -> float:
+    """max relative residual of Barker's eq. 49-51 for the wrist rates a solver produces.
+
+    At random q and random hand-axes twists (TVEL, RVEL) (m/s, rad/s) the solver (default
+    pinrate's MCA2, :func:`joint_rates`) gives the six rates. The residual is computed from the
+    paper alone: RVEL^ = L RVEL (eq. B1, L of eq. B16-B24 with P2 = -S23), RVEL~ = RVEL^ -
+    z0 theta1 - z1 theta2 - z2 theta3 with the solver's arm rates (eq. 48; z of eq. C7-C10),
+    D1..D5 (eq. 52-56), then
+
+        theta5 + C4 D5 + S4 D4 (eq. 49),   S5 theta6 + S4 D5 - C4 D4 (eq. 50),
+        theta4 + C5 theta6 - SAL3 D3 + CAL3 D2 (eq. 51),
+
+    each over max(1, max |rate|) (rad/s). It is rounding for rates that realise the commanded
+    RVEL; wrong wrist (or arm) rates leave it at their error.
+    """
     robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
+    solve = _mca2_rates if solver is None else solver
     alpha3 = (robots.parameters("barker_arm") | lengths)["alpha3"]
     sal3, cal3 = math.sin(alpha3), math.cos(alpha3)
     generator = np.random.default_rng(9)
     worst = 0.0
     for q in robot.sample_configurations(count, 8):
-        rates = joint_rates(robot, q, generator.normal(size=6), algorithm="mca2")
-        hand = robot.frame_pose(q, "hand")[:3, :3]
-        residual = hand @ (robot.jacobian(q)[3:, 3:] @ rates[3:])  # RVEL~ of eq. 48, base axes
-        t1, t2, t3, t4, t5, _ = q
-        C1, S1, S23, C23 = math.cos(t1), math.sin(t1), math.sin(t2 + t3), math.cos(t2 + t3)
-        C4, S4, C5, S5 = math.cos(t4), math.sin(t4), math.cos(t5), math.sin(t5)
-        D1 = C1 * residual[0] + S1 * residual[1]
-        D2 = S1 * residual[0] - C1 * residual[1]
-        D3 = S23 * D1 + C23 * residual[2]
-        D4 = C23 * D1 - S23 * residual[2]
-        D5 = cal3 * D3 + sal3 * D2
-        worst = max(
-            worst,
-            abs(rates[4] - (-C4 * D5 - S4 * D4)),
-            abs(S5 * rates[5] - (-S4 * D5 + C4 * D4)),
-            abs(rates[3] + C5 * rates[5] - (sal3 * D3 - cal3 * D2)),
+        twist = generator.normal(size=6)
+        rates = np.asarray(solve(robot, q, twist), dtype=float)
+        rvel_hat = barker.hand_to_base(q, lengths) @ twist[3:]  # eq. B1
+        rvel_tilde = barker.wrist_residual_rotation(q, rvel_hat, rates[:3])  # eq. 48
+        _, D2, D3, D4, D5 = barker.wrist_terms(q, rvel_tilde, lengths)  # eq. 52-56
+        C4, S4, C5, S5 = math.cos(q[3]), math.sin(q[3]), math.cos(q[4]), math.sin(q[4])
+        residual = max(
+            abs(rates[4] - (-C4 * D5 - S4 * D4)),  # eq. 49
+            abs(S5 * rates[5] - (-S4 * D5 + C4 * D4)),  # eq. 50
+            abs(rates[3] + C5 * rates[5] - (sal3 * D3 - cal3 * D2)),  # eq. 51
         )
+        worst = max(worst, residual / max(1.0, float(np.abs(rates).max())))
     return worst
 
 
@@ -340,6 +474,8 @@ class Simulation:
     reason: str
     error_growth: float  # the largest total error over the initial one
     final_q: np.ndarray
+    q: np.ndarray  # (steps + 1, nq): the servo's configurations, q0 first
+    total_error: np.ndarray  # (steps + 1,): position + orientation error norms (m + rad) at each q
 
 
 def simulate_mca2(robot: Robot, q0: np.ndarray, q_target: np.ndarray, *, dead_beat: bool) -> Simulation:
@@ -364,7 +500,87 @@ def simulate_mca2(robot: Robot, q0: np.ndarray, q_target: np.ndarray, *, dead_be
         reason=trajectory.reason,
         error_growth=float(total.max() / total[0]),
         final_q=trajectory.q[-1],
+        q=trajectory.q,
+        total_error=total,
     )
+
+
+DEAD_BEAT_GAIN = 100.0
+"""1/s: with dt = 0.01 s, gain dt = 1, the sensor commands the whole error each sample."""
+
+
+@dataclass(frozen=True)
+class Continuation:
+    """The servo's dead-beat MCA2 step iterated with no stop rule (Fig. 6(b))."""
+
+    q: np.ndarray  # (steps + 1, nq), q0 first
+    position_error: np.ndarray  # (steps + 1,) m, sensor axes
+    orientation_error: np.ndarray  # (steps + 1,) rad
+    converged: bool  # both norms below tol at the last q
+    statuses: tuple[str, ...]  # each step's Status name
+
+    @property
+    def steps(self) -> int:
+        """Steps taken."""
+        return len(self.q) - 1
+
+    @property
+    def total_error(self) -> np.ndarray:
+        """Position + orientation error norms (m + rad) at each q: the servo's stop-rule measure."""
+        return self.position_error + self.orientation_error
+
+
+def continue_dead_beat_mca2(
+    robot: Robot,
+    q0: np.ndarray,
+    q_target: np.ndarray,
+    *,
+    position_limits: bool,
+    max_steps: int = 2000,
+    tol: float = 1e-6,
+) -> Continuation:
+    """:func:`simulate_mca2`'s dead-beat step (MCA2, gain 100 1/s, dt 0.01 s, no speed or
+    velocity limits) taken again and again from q0 towards the pose at q_target until both
+    error norms are under ``tol`` (m, rad) or ``max_steps`` ran out: the servo without its
+    stop rules (it has no switch for them). ``singularity="generalized_inverse"`` keeps a
+    near-singular A from halting the run (it changes a step only where a singular value of A
+    falls under the controller's threshold); ``position_limits`` holds the URDF's limits."""
+    controller = Controller(
+        robot,
+        algorithm="mca2",
+        dt=0.01,
+        singularity="generalized_inverse",
+        velocity_limits=math.inf,
+        position_limits=position_limits,
+        max_linear_speed=math.inf,
+        max_angular_speed=math.inf,
+    )
+    goal = PoseGoal.of(robot.pose(q_target), DEAD_BEAT_GAIN)
+    q = robot.check_q(q0)
+    configurations: list[np.ndarray] = [q]
+    positions: list[float] = []
+    orientations: list[float] = []
+    statuses: list[str] = []
+    while True:
+        position, orientation = error_norms(controller.observe(q, goal), controller.index.m)
+        positions.append(position)
+        orientations.append(orientation)
+        converged = position < tol and orientation < tol
+        if converged or len(statuses) == max_steps:
+            break
+        step = controller.step(q, goal)
+        q = step.q
+        configurations.append(q)
+        statuses.append(step.status.name)
+    errors = np.array(positions), np.array(orientations)
+    return Continuation(np.array(configurations), *errors, converged, tuple(statuses))
+
+
+FIG6_POSES = {
+    "a": ((0.50, 0.0, 60.0), (0.45, 20.0, 40.0)),
+    "b": ((-1.5, 0.0, 150.0), (-0.9, 20.0, 130.0)),
+}
+"""Fig. 6's (start, target) as (λ, theta1 in deg, theta3 in deg) of :func:`polar_pose_with_lambda`."""
 
 
 def polar_pose_with_lambda(lam: float, theta1_deg: float, theta3_deg: float, l: float = 0.2) -> np.ndarray:  # noqa: E741
@@ -373,16 +589,35 @@ def polar_pose_with_lambda(lam: float, theta1_deg: float, theta3_deg: float, l: 
     return np.array([math.radians(theta1_deg), l * c3 * (1 / lam - 1), math.radians(theta3_deg)])
 
 
+def fig6_poses(which: str) -> tuple[np.ndarray, np.ndarray]:
+    """(q0, q_target) of Fig. 6(``which``), ``which`` "a" or "b" (:data:`FIG6_POSES`)."""
+    start, target = FIG6_POSES[which]
+    return polar_pose_with_lambda(*start), polar_pose_with_lambda(*target)
+
+
 def fig6() -> tuple[Simulation, Simulation]:
     """Fig. 6 rerun from poses with the printed λ: (a) 0.50 -> 0.45, (b) -1.5 -> -0.9."""
     robot = robots.planar_polar()
-    converging = simulate_mca2(
-        robot, polar_pose_with_lambda(0.50, 0, 60), polar_pose_with_lambda(0.45, 20, 40), dead_beat=True
-    )
-    diverging = simulate_mca2(
-        robot, polar_pose_with_lambda(-1.5, 0, 150), polar_pose_with_lambda(-0.9, 20, 130), dead_beat=True
-    )
+    converging = simulate_mca2(robot, *fig6_poses("a"), dead_beat=True)
+    diverging = simulate_mca2(robot, *fig6_poses("b"), dead_beat=True)
     return converging, diverging
+
+
+def fig6b_continued(max_steps: int = 2000) -> tuple[Continuation, Continuation]:
+    """Fig. 6(b)'s dead-beat MCA2 past the servo's divergence stop: (without joint limits,
+    with the URDF's limits held: 0.05 <= d2 <= 1 m, |theta1|, |theta3| <= 180°)."""
+    robot = robots.planar_polar()
+    q0, q_target = fig6_poses("b")
+    return (
+        continue_dead_beat_mca2(robot, q0, q_target, position_limits=False, max_steps=max_steps),
+        continue_dead_beat_mca2(robot, q0, q_target, position_limits=True, max_steps=max_steps),
+    )
+
+
+def polar_pole_crossings(q: np.ndarray, l: float = 0.2) -> int:  # noqa: E741
+    """How often d2 + l C3, the denominator of G (eq. 56), changes sign along q (steps, nq)."""
+    denominator = q[:, 1] + l * np.cos(q[:, 2])
+    return int(np.count_nonzero(np.diff(np.sign(denominator)) != 0))
 
 
 def scara_configuration(
@@ -445,6 +680,35 @@ def _outcome(simulation: Simulation) -> str:
     if simulation.converged:
         return "converges"
     return f"diverges ({simulation.reason.split(':')[0]}, error ×{simulation.error_growth:.1f})"
+
+
+def _fig6b_row(servo_run: Simulation) -> Result:
+    """S&K Fig. 6(b): the servo's run and its step continued past the stop rules."""
+    free, held = fig6b_continued()
+    total, total_free = servo_run.total_error, free.total_error
+    stop = len(total) - 1
+    below_zero = int(np.argmax(free.q[:, 1] < 0)) if (free.q[:, 1] < 0).any() else -1
+    turn1, turn3 = (
+        abs(math.degrees(math.remainder(float(offset), 2 * math.pi)))
+        for offset in free.q[-1, [0, 2]] - fig6_poses("b")[1][[0, 2]]
+    )
+    return Result(
+        "S&K Fig. 6(b)",
+        "polar, MCA2: λ -1.5 (start) -> -0.9 (target), |λ| > 1 at the start: "
+        '"the convergence condition is not fulfilled and the trajectory diverges"',
+        f"dead-beat sensor, λ {servo_run.start_lambda:.2f} -> {servo_run.target_lambda:.2f}: the servo stops at "
+        f"step {stop} (diverging: error ×{total[-1] / total[0]:.1f} its start, ×{total[-1] / total.min():.1f} its "
+        f"best). Its step iterated on, no stop rule: without joint limits the error grows to "
+        f"×{total_free.max() / total_free[0]:.1f} at step {int(np.argmax(total_free))}, G's pole d2 + l C3 = 0 is "
+        f"crossed {polar_pole_crossings(free.q)} times, d2 < 0 from step {below_zero}, and it "
+        f"{'converges' if free.converged else 'does not converge'} in {free.steps} steps on the mirror branch "
+        f"d2 = {free.q[-1, 1]:.3f} m (theta1 {turn1:.0f}°, theta3 {turn3:.0f}° from the target's: the target pose, "
+        f"outside the stroke 0.05-1 m); with the URDF's limits held it ends at d2 = {held.q[-1, 1]:.2f} m, theta3 = "
+        f"{math.degrees(held.q[-1, 2]):.0f}°, {held.position_error[-1]:.3f} m and {held.orientation_error[-1]:.2f} "
+        f"rad from the target after {held.steps} steps. On the robot the paper's outcome holds; |λ| > 1 at the "
+        "start alone does not make the iteration diverge (the Theorem's condition is sufficient only)",
+        "papers/test_worked_examples.py::test_fig_6b_continued",
+    )
 
 
 def _barker_arm_rows() -> list[Result]:
@@ -524,12 +788,41 @@ def _barker_elbow_row() -> Result:
         "Barker eq. 45-46",
         "near theta3 = 0: theta3 = K3 (TVEL)_X2, 0 for an outward command at theta3 = 0; "
         "theta2 = -WE/(WE+ES) theta3 + K2 (TVEL)_Y2/(WE+ES); the sign of K3 changed at each entry "
-        "(the OCR's B28-B29 misplace a bracket: X2, Y2 are rows of R_2^1 R_1^0)",
+        "(X2, Y2 are rows of R_2^1 R_1^0; the OCR's B28-B29 misplace a bracket and flip a sign, next row)",
         f"singularity=auxiliary_elbow at theta3 = 0, 18 commands along X2 and Y2 on 3 arm poses, K2 = 1: "
         f"max relative deviation {_deviation(elbow)} (theta3, eq. 45) and {_deviation(shoulder)} (theta2, eq. 46); "
         f"theta3 after three retractions from full extension: {bends} rad",
         "papers/test_barker.py::test_auxiliary_elbow_eq_45_46",
     )
+
+
+def _barker_appendix_b_rows() -> tuple[Result, Result]:
+    """Barker eq. B1-B24 and B27-B29 against the robot (:mod:`pinrate.papers.barker`)."""
+    test = "papers/test_barker.py::"
+    derived, printed, b4 = barker.hand_to_base_errors()
+    derived_off, printed_off, b4_off = barker.hand_to_base_errors(alpha3=1.4, a3=0.05, r3=0.03)
+    components, as_printed, bracket_only = barker.upper_arm_component_errors()
+    hand = Result(
+        "Barker eq. B1-B24",
+        "TVEL^ = L TVEL, RVEL^ = L RVEL, L = R_0^6 from P1, P2, Q1..Q4, T1..T4 (B6-B24); B11 prints "
+        "P2 = -S23 CAL3: it is -S23 (R_1^2 R_2^3 of eq. A2-A3 has first column (-C23, -S23, 0))",
+        f"L with P2 = -S23 vs the robot's hand rotation: max deviation {_deviation(derived)} (nominal), "
+        f"{_deviation(derived_off)} (alpha3 = 1.4, a3 = 0.05, r3 = 0.03); with the printed P2, L is off by up to "
+        f"{printed:.2f} (nominal) and {printed_off:.2f} (alpha3 = 1.4), B4 by up to {b4:.2f} and {b4_off:.2f} per "
+        "entry (max |S23| (1 - CAL3))",
+        test + "test_hand_to_base_b1_b24",
+    )
+    upper_arm = Result(
+        "Barker eq. B27-B29",
+        "(TVEL)_X2, (TVEL)_Y2 = rows 1-2 of R_2^1 R_1^0 TVEL^ (B27); B28-B29 print S2[C1 TVEL(1) - S1 TVEL(2) "
+        "+ C2 TVEL(3)] and C2[C1 TVEL(1) - S1 TVEL(2) - S2 TVEL(3)]: the bracket closes after TVEL(2) and "
+        "S1 TVEL(2) has sign + (rows (S2 C1, S2 S1, C2), (C2 C1, C2 S1, -S2))",
+        f"derived B28-B29 vs TVEL^ along the robot's X2 (shoulder to elbow) and Y2 = z1 x X2, unit TVEL^: max "
+        f"deviation {_deviation(components)} m/s; as printed off by up to {as_printed:.2f} m/s, with only the "
+        f"bracket mended {bracket_only:.2f} m/s",
+        test + "test_upper_arm_components_b27_b29",
+    )
+    return hand, upper_arm
 
 
 def _barker_wrist_rows() -> list[Result]:
@@ -672,13 +965,29 @@ def results() -> list[Result]:
             "papers/test_worked_examples.py::test_spherical_6dof_jacobian_and_eigenvalues",
         )
     )
-    fraction, k_fraction, sufficient = spherical_6dof_fractions()
+    printed_others, printed_33, corrected_33 = printed_eq71_errors()
+    rows.append(
+        Result(
+            "S&K eq. 71",
+            "G = (l / det A)[...] from the printed eq. 70; entry (3, 3) printed d3 S2 C4 S5 + l S2 C4 S5 C5",
+            f"U A^-1 B W^-1 of the printed eq. 70 (column 2 (0, d3 - l C5, -l C4 S5)) vs eq. 71, 300 random q, "
+            f"relative: entries other than (3, 3) {_deviation(printed_others)}; (3, 3) as printed "
+            f"off by up to {printed_33:.2f}, with the d3 term's sign changed (-d3 S2 C4 S5 + l S2 C4 S5 C5) "
+            f"{_deviation(corrected_33)}",
+            "papers/test_worked_examples.py::test_printed_eq_71",
+        )
+    )
+    volume = spherical_6dof_work_volume()
     rows.append(
         Result(
             "S&K eq. 72-73, Fig. 12",
-            "converges where C2 C5 - S2 C4 S5 > 0: at least 50 % of the work volume",
-            f"ρ < 1 on {100 * fraction:.1f} %; eq. 72 holds on {100 * k_fraction:.1f} %; "
-            f"eq. 72 ⇒ ρ < 1 on every sample: {_yes(sufficient)}",
+            "-90° < theta5 < 90°, d3 > 2 l: eq. 72 (C2 C5 - S2 C4 S5 > 0) gives convergence always (any theta4) "
+            "within at least 50 % of the work volume; much more when C4 does not take both ±1",
+            f"{volume.samples} samples uniform in the joint limits ((theta2, theta5) in (-90°, 90°)²): eq. 72 holds "
+            f"for every theta4 (at C4 = ±1) on {100 * volume.every_theta4:.2f} % (exactly 1/2: "
+            f"|theta2| + |theta5| < 90°; binomial SE {100 * math.sqrt(0.25 / volume.samples):.2f} %), at theta4 = 0 "
+            f"on {100 * volume.theta4_zero:.2f} % (exactly 3/4); pinrate's ρ < 1 wherever it holds for every "
+            f"theta4 (at theta4 = 0°, 180° and the sample's): {_yes(volume.sufficient)}",
             "papers/test_worked_examples.py::test_spherical_6dof_work_volume",
         )
     )
@@ -702,12 +1011,19 @@ def results() -> list[Result]:
         )
     )
     rows.extend(_barker_arm_rows())
+    hand_row, upper_arm_row = _barker_appendix_b_rows()
     rows.append(_barker_elbow_row())
+    rows.append(upper_arm_row)
+    rows.append(hand_row)
     rows.append(
         Result(
             "Barker eq. 49-51",
-            "wrist rates from D1..D5",
-            f"max residual {_deviation(barker_wrist_deviation())}",
+            "theta5 = -C4 D5 - S4 D4, S5 theta6 = -S4 D5 + C4 D4, theta4 + C5 theta6 = SAL3 D3 - CAL3 D2, "
+            "D1..D5 of eq. 52-56 from RVEL~ (eq. 48)",
+            "pinrate's MCA2 rates for 200 random q and hand-axes twists, put into eq. 49-51 with RVEL^ = L RVEL "
+            "(eq. B1) and RVEL~ from their arm rates: max residual / max(1, |rates|) "
+            f"{_deviation(barker_wrist_deviation())} rad/s (nominal), "
+            f"{_deviation(barker_wrist_deviation(alpha3=1.4, a3=0.05, r3=0.03))} (alpha3 = 1.4, a3 = 0.05, r3 = 0.03)",
             "papers/test_worked_examples.py::test_barker_wrist_rates",
         )
     )
@@ -722,14 +1038,7 @@ def results() -> list[Result]:
             "papers/test_worked_examples.py::test_fig_6",
         )
     )
-    rows.append(
-        Result(
-            "S&K Fig. 6(b)",
-            "polar, MCA2: λ -1.5 -> -0.9, diverges",
-            f"dead-beat sensor, λ {polar_b.start_lambda:.2f} -> {polar_b.target_lambda:.2f}: {_outcome(polar_b)}",
-            "papers/test_worked_examples.py::test_fig_6",
-        )
-    )
+    rows.append(_fig6b_row(polar_b))
     scara_a, scara_b = fig9()
     rows.append(
         Result(
