@@ -75,8 +75,9 @@ def spectral_radius_tolerance(
                 + 8 n ε (κ(A) + κ(W) + 1) ‖P‖ ‖Q‖,
 
     the last term also covering the products and the closed-form eigenvalue routine's own
-    rounding (backward error about ε ‖G‖). Configurations where A or W loses rank get inf; a wide A or a tall W is pseudo-inverted
-    (the pseudo-inverse G), its smallest nonzero singular value in place of 1 / ‖A^-1‖.
+    rounding (backward error about ε ‖G‖). Configurations where A or W loses rank get inf;
+    a wide A or a tall W is pseudo-inverted (the pseudo-inverse G), its smallest nonzero
+    singular value in place of 1 / ‖A^-1‖.
     """
     rows, columns = partition_rows_and_columns(robot, partition)
     m, n_arm = len(partition.linear), sum(len(robot.velocity_indices(joint)) for joint in partition.arm)
