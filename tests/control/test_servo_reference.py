@@ -20,6 +20,7 @@ from support import DATA, EPS, partition_rows_and_columns, spectral_radius_toler
 REFERENCE = np.load(DATA / "servo_reference.npz")
 RUNS = sorted({key.split("/")[0] for key in REFERENCE.files})
 
+
 @pytest.fixture(autouse=True)
 def python_path() -> Iterator[None]:
     """The release's runs were made on Python: the Python path must reproduce them to the bit
