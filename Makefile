@@ -9,28 +9,34 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-$(VENV)/.installed: $(BIN)/python pyproject.toml
+# What `make demo` needs: pinrate and its dependencies, editable.
+$(VENV)/.runtime: $(BIN)/python pyproject.toml
+	$(BIN)/python -m pip install --quiet -e .
+	touch $@
+
+# What `make test` needs besides: the test extra (pytest, ruff, mypy, playwright, ...).
+$(VENV)/.installed: $(VENV)/.runtime
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@
 
 # The compiled core (core/, pinrate_core): built where a C++ compiler works, skipped where
 # none does (pinrate then runs its pure-Python path). PINRATE_CORE=0 skips it on purpose.
-# It costs about 2 minutes of compile time and 3.2 GB of memory, once.
-CORE_BUILD_DEPS := "scikit-build-core>=0.10,<2" "nanobind>=2.0,<4" "cmake>=3.18" ninja "cmeel-eigen>=3.4,<4"
+# It is the README's own command, `pip install ./core`, with pip's build isolation: the
+# headers and build tools come from core/pyproject.toml's build-system.requires. It costs
+# about 2 minutes of compile time and 3.2 GB of memory, once.
 PINRATE_CORE ?= 1
-$(VENV)/.core: $(VENV)/.installed core/pyproject.toml core/CMakeLists.txt $(wildcard core/src/*)
+$(VENV)/.core: $(VENV)/.runtime core/pyproject.toml core/CMakeLists.txt $(wildcard core/src/*)
 	@if [ "$(PINRATE_CORE)" = 0 ]; then \
 		$(BIN)/python -m pip uninstall --quiet --yes pinrate-core 2>/dev/null; \
 		echo "pinrate: the compiled core is off (PINRATE_CORE=0): the pure-Python path runs"; \
 		echo 0 > $@; \
 	elif echo "pinrate: building the compiled core (about 2 minutes, once; PINRATE_CORE=0 skips it)" && \
-		$(BIN)/python -m pip install --quiet $(CORE_BUILD_DEPS) > $(VENV)/core-build.log 2>&1 && \
-		$(BIN)/python -m pip install --no-build-isolation ./core >> $(VENV)/core-build.log 2>&1; then \
+		$(BIN)/python -m pip install ./core > $(VENV)/core-build.log 2>&1; then \
 		echo "pinrate: compiled core built ($$($(BIN)/python -c 'import pinrate.compiled as c; print(c.backend())'))"; \
 		echo 1 > $@; \
 	else \
 		$(BIN)/python -m pip uninstall --quiet --yes pinrate-core 2>/dev/null; \
-		grep -m 3 -E "CMake Error|error:|not able to compile" $(VENV)/core-build.log | sed 's/^ */  /'; \
+		grep -m 3 -E "CMake Error|error:|not able to compile|not found:" $(VENV)/core-build.log | sed 's/^ */  /'; \
 		echo "pinrate: the compiled core did not build (no C++ compiler? $(VENV)/core-build.log says why):"; \
 		echo "pinrate: the pure-Python path runs, with the same results"; \
 		echo failed > $@; \
@@ -46,17 +52,18 @@ core: $(VENV)/.core
 demo: $(VENV)/.core
 	$(BIN)/pinrate demo ur5
 
-test: $(VENV)/.core
-	$(BIN)/ruff check src tests examples benchmarks
-	$(BIN)/lint-imports
+# The static checks first (seconds), then the suite.
+test: lint $(VENV)/.core
 	$(BIN)/python -m pytest -q
 
+LINTED := src tests examples benchmarks .ci
 lint: $(VENV)/.installed
-	$(BIN)/ruff check src tests examples benchmarks
+	$(BIN)/ruff check $(LINTED)
+	$(BIN)/ruff format --check $(LINTED)
 	$(BIN)/lint-imports
+	$(BIN)/mypy src/pinrate
 
 typecheck: $(VENV)/.installed
-	$(BIN)/python -m pip install --quiet mypy
 	$(BIN)/mypy src/pinrate
 
 bench: $(VENV)/.installed

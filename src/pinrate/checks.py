@@ -68,16 +68,11 @@ def _refuse_entries(array: np.ndarray, what: str, names: Sequence[str] | None, b
 def check_positive(value: object, name: str, *, allow_inf: bool = False, maximum: float = PHYSICAL_BOUND) -> float:
     """``value`` as a float in (0, ``maximum``] (or inf when ``allow_inf``); InputError
     naming ``name`` otherwise."""
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, numbers.Real)
-        or math.isnan(value)
-        or value <= 0
-        or (value > maximum and not (value == math.inf and allow_inf))
-    ):
+    number = float(value) if isinstance(value, numbers.Real) and not isinstance(value, bool) else math.nan
+    if math.isnan(number) or number <= 0 or (number > maximum and not (number == math.inf and allow_inf)):
         bound = f"a positive number up to {maximum:g}" + (" (or inf)" if allow_inf else "")
         raise InputError(f"{name} must be {bound}, got {value!r}")
-    return float(value)
+    return number
 
 
 MAX_SAMPLES = 10_000_000

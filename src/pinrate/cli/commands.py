@@ -1,43 +1,37 @@
-"""The subcommands of ``pinrate``: ``list``, ``demo``, ``analyze`` and ``paper``, and their parser
-(``teleop`` lives in :mod:`.teleop`)."""
+"""The subcommands ``list`` and ``demo``, and what the others share: loading the robot the
+command line names, and ``--q0`` (``analyze`` and ``paper`` live in :mod:`.reporting`,
+``teleop`` in :mod:`.teleop`; the parser, which imports none of them, in :mod:`.parser`).
+
+Importing this module loads numpy and Pinocchio: :func:`.entry.main` does so once the
+arguments are parsed.
+"""
 
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
 
-from .. import __version__, analysis, robots
-from ..checks import check_output_file, check_output_folder
-from ..compiled import backend
+from .. import robots
+from ..checks import check_output_file
 from ..control.servo_loop import servo
 from ..control.trajectory import Trajectory
-from ..errors import InputError, PinrateError
+from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..kinematics.targets import nearby_target
-from ..kinematics.urdf_structure import MAX_JOINTS
-from ..papers import markdown, results
 from ..robots import EXAMPLE_ROBOTS, ROBOT_NAMES, example_robot_data_share, load
 from ..solvers.error_map import THEOREM_ALGORITHMS
-from ..solvers.registry import ALGORITHMS
 from ..theorem.pointwise import coupling_along
-from . import teleop
-from .arguments import Parser, count, finite, positive, warn
-
-DEMO_MAX_STEPS = 6000
-"""The demo's step budget (60 s at dt = 0.01): MCA1 with ρ near 0.8 (TIAGo's arm) needs about
-30 s to bring the rotation error under 1e-4 rad; a target it cannot reach stops earlier, as
-"stalled" (servo's stall rule)."""
+from .arguments import warn
 
 
-def _list(_: argparse.Namespace) -> int:
+def list_robots(_: argparse.Namespace) -> int:
     print("The papers' robots (pinrate.robots, urdf/):")
     for name in ROBOT_NAMES:
         summary_line = (getattr(robots, name).__doc__ or "").strip().splitlines()[0]
@@ -140,22 +134,23 @@ def _targets(args: argparse.Namespace, robot: Robot, partition: Partition, start
     return [nearby_target(robot, partition, args.seed + k, start=start)[1] for k in range(args.targets)]
 
 
-def _load(args: argparse.Namespace) -> Robot:
+def load_robot(args: argparse.Namespace) -> Robot:
+    """The robot of ``args.robot``, ``--tip``, ``--sensor`` and ``--max-joints``; says which tip it chose."""
     robot = load(args.robot, tip=args.tip, sensor=args.sensor, max_joints=args.max_joints)
     if robot.tip_choice != "given":
         print(f"tip        {robot.tip} ({robot.tip_choice}; --tip to choose another)")
     return robot
 
 
-def _demo(args: argparse.Namespace) -> int:
+def demo(args: argparse.Namespace) -> int:
     record = None
     if args.record:
         if args.no_viewer:
             raise InputError("--record writes the viewer's replay: drop --no-viewer")
         record = check_output_file(args.record, "--record")
-    robot = _load(args)
+    robot = load_robot(args)
     partition = Partition.auto(robot)
-    start = robot.home() if args.q0 is None else _start(robot, args.q0)
+    start = robot.home() if args.q0 is None else start_configuration(robot, args.q0)
     targets = _targets(args, robot, partition, start)
     viewer = None
     if not args.no_viewer:
@@ -170,7 +165,7 @@ def _demo(args: argparse.Namespace) -> int:
     try:
         q = start
         if viewer is not None:
-            viewer.frame(q, [target[:3, 3] for target in targets])
+            viewer.frame(q, np.array([target[:3, 3] for target in targets]))
             viewer.show(q)
         all_converged = True
         for index, target in enumerate(targets, start=1):
@@ -216,7 +211,7 @@ def _demo(args: argparse.Namespace) -> int:
             viewer.close()
 
 
-def _start(robot: Robot, values: list[float]) -> np.ndarray:
+def start_configuration(robot: Robot, values: list[float]) -> np.ndarray:
     """--q0: one value per moving joint in ``robot.joint_names`` order (an angle for a
     continuous joint), checked like any q."""
     if len(values) != len(robot.joint_names):
@@ -230,174 +225,5 @@ def _start(robot: Robot, values: list[float]) -> np.ndarray:
     return robot.check_q(q[0])
 
 
-def _partition_from_args(args: argparse.Namespace, robot: Robot) -> Partition:
-    automatic = Partition.auto(robot)
-    if args.arm is None and args.wrist is None and args.linear is None and args.angular is None:
-        return automatic
-
-    def names(text: str | None, default: tuple[str, ...]) -> tuple[str, ...]:
-        return default if text is None else tuple(name for name in text.split(",") if name)
-
-    return Partition(
-        names(args.arm, automatic.arm),
-        names(args.wrist, automatic.wrist),
-        linear=automatic.linear if args.linear is None else args.linear,
-        angular=automatic.angular if args.angular is None else args.angular,
-    )
-
-
-def _analyze(args: argparse.Namespace) -> int:
-    out = check_output_folder(args.out, "--out")  # before the long part of the work
-    robot = _load(args)
-    partition = _partition_from_args(args, robot)
-    factory = None
-    if args.sweep:  # checked before the long part of the work
-        parameter, low, high = analysis.parse_sweep(args.sweep)
-        if args.robot not in robots.ROBOT_NAMES:
-            raise InputError(
-                f"--sweep needs one of the papers' parametric robots ({', '.join(robots.ROBOT_NAMES)}); "
-                "for another robot call pinrate.analysis.sweep with a factory"
-            )
-        if parameter not in robots.parameters(args.robot):
-            raise InputError(
-                f"{args.robot} has no parameter {parameter!r}; its parameters: "
-                f"{', '.join(robots.parameters(args.robot))}"
-            )
-
-        def factory(value: float) -> Robot:
-            return robots.build(args.robot, tip=args.tip, sensor=args.sensor, **{parameter: value})
-
-    started = time.perf_counter()
-    report = analysis.analyze(
-        robot,
-        samples=args.samples,
-        partition=partition,
-        rng=args.seed,
-        map_joints=args.joints,
-        points=args.points,
-        workers=args.workers,
-        scheduler=args.scheduler,
-    )
-    if factory is not None:
-        report.sweep = analysis.sweep(factory, parameter, low, high, samples=max(1000, args.samples // 25))
-    path = analysis.write_report(report, out)
-    print(report.markdown(), end="")
-    print(
-        f"\nwritten: {path} and {', '.join(p.name for p in report.files.values())} "
-        f"({time.perf_counter() - started:.1f} s)"
-    )
-    return 0
-
-
-def _paper(_: argparse.Namespace) -> int:
-    print(markdown(results()), end="")
-    return 0
-
-
-def _robot_arguments(parser: argparse.ArgumentParser, tip_help: str, sensor_help: str) -> None:
-    parser.add_argument("robot", help="a name from `pinrate list` or a URDF path")
-    parser.add_argument("--tip", help=tip_help)
-    parser.add_argument("--sensor", help=sensor_help)
-    parser.add_argument(
-        "--max-joints",
-        type=count(1),
-        help=f"refuse URDFs with more moving joints (default {MAX_JOINTS}, or $PINRATE_MAX_JOINTS)",
-    )
-
-
-class _Version(argparse.Action):
-    """``--version``: pinrate's version and the path its loops take (the compiled core or
-    pure Python, and why)."""
-
-    def __init__(self, option_strings: list[str], dest: str, **keywords: object) -> None:
-        super().__init__(option_strings, dest, nargs=0, help="print the version and the backend, then exit")
-
-    def __call__(self, parser: argparse.ArgumentParser, *_: object) -> None:
-        print(f"pinrate {__version__}\nbackend: {backend()}")
-        parser.exit()
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = Parser(prog="pinrate", description="Resolved-rate motion control for URDF arms.")
-    parser.add_argument("-v", "--verbose", action="store_true", help="log what pinrate chooses")
-    parser.add_argument("--version", action=_Version)
-    commands = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-
-    listing = commands.add_parser("list", help="print every robot name pinrate can load")
-    listing.set_defaults(run=_list)
-
-    paper = commands.add_parser("paper", help="recompute every result of the two papers (Markdown table)")
-    paper.set_defaults(run=_paper)
-
-    analyze = commands.add_parser("analyze", help="where do MCA1/2/3 converge? report with region maps")
-    _robot_arguments(analyze, "TCP frame", "frame the twist is expressed in")
-    analyze.add_argument("--arm", help="comma-separated arm joints (default: the automatic partition)")
-    analyze.add_argument("--wrist", help="comma-separated wrist joints")
-    analyze.add_argument("--linear", help="controlled linear axes, e.g. xy")
-    analyze.add_argument("--angular", help="controlled angular axes, e.g. z")
-    analyze.add_argument("--samples", type=count(1), default=100_000, help="configurations for the work-volume share")
-    analyze.add_argument("--joints", nargs=2, metavar=("X", "Y"), help="the region map's two joints")
-    analyze.add_argument("--points", type=count(2), default=121, help="region map grid points per joint (>= 2)")
-    analyze.add_argument("--sweep", metavar="PARAM=LO:HI", help="sweep a parameter of a papers' robot")
-    analyze.add_argument("--out", default="analysis", help="folder for report.md and the PNGs")
-    analyze.add_argument("--workers", type=count(1), default=1, help="processes on this machine")
-    analyze.add_argument("--scheduler", help="a Dask scheduler address (needs pinrate[dask])")
-    analyze.add_argument("--seed", type=count(0), default=0, help="seed of the samples (>= 0)")
-    analyze.set_defaults(run=_analyze)
-
-    demo = commands.add_parser("demo", help="servo a robot from home to a target and summarise")
-    _robot_arguments(
-        demo,
-        "TCP frame (default: the name table's, or the chain's end)",
-        "frame the twist is expressed in (default: the tip)",
-    )
-    demo.add_argument("--algorithm", default="mca1", choices=ALGORITHMS)
-    demo.add_argument(
-        "--target",
-        nargs=6,
-        type=finite,
-        metavar=("X", "Y", "Z", "R", "P", "Y"),
-        help="target tip pose in the world: metres and roll-pitch-yaw radians",
-    )
-    demo.add_argument(
-        "--q0",
-        nargs="+",
-        type=finite,
-        metavar="Q",
-        help="start configuration: one value per moving joint, rad or m (default: the robot's home)",
-    )
-    demo.add_argument("--seed", type=count(0), default=0, help="seed of the default random target (>= 0)")
-    demo.add_argument("--dt", type=positive, default=0.01, help="control period in seconds")
-    demo.add_argument("--gain", type=positive, default=1.0, help="twist per unit pose error (1/s)")
-    demo.add_argument("--max-steps", type=count(0), default=DEMO_MAX_STEPS)
-    demo.add_argument("--tol", type=positive, default=1e-4, help="convergence tolerance (m and rad)")
-    demo.add_argument("--targets", type=count(1), default=1, help="number of random targets, one after the other")
-    demo.add_argument("--speed", type=positive, default=1.0, help="playback speed in the viewer (x real time)")
-    demo.add_argument("--open", action="store_true", help="open the viewer in the default browser")
-    demo.add_argument("--record", metavar="HTML", help="write a standalone HTML replay of the whole run")
-    demo.add_argument(
-        "--host",
-        default="127.0.0.1",
-        help="address the Meshcat server listens on (default: this machine only; another one is warned about)",
-    )
-    demo.add_argument("--no-viewer", action="store_true", help="headless: print the summary only")
-    demo.set_defaults(run=_demo)
-    teleop.add_parser(commands, _robot_arguments)
-    return parser
-
-
-def run(argv: Sequence[str] | None = None) -> int:
-    """Parse ``argv`` and run the command; a refused input is one line on stderr and 2.
-
-    The process-level concerns (signals, interrupts, closed pipes) are :func:`.entry.main`'s.
-    """
-    try:
-        args = build_parser().parse_args(argv)
-    except SystemExit as finished:  # --help, or a usage error already printed on one line
-        return finished.code if isinstance(finished.code, int) else 2
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="pinrate: %(message)s")
-    try:
-        return int(args.run(args))
-    except PinrateError as error:
-        print(f"pinrate: error: {error}", file=sys.stderr)
-        return 2
+COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {"list": list_robots, "demo": demo}
+"""The subcommands of this module, by name (:func:`.entry.main` runs them)."""

@@ -8,21 +8,30 @@ terminated (SIGTERM), 141 its output pipe closed (``| head``).
 
 The CLI owns SIGINT: CPython raises KeyboardInterrupt only when SIGINT was at its default
 disposition at start-up, and a background job of a non-interactive shell inherits it
-ignored, so a ``pinrate demo`` started that way would never hear Ctrl-C. Heavy imports
-(Pinocchio, matplotlib) happen inside the guarded region with signals deferred: an
-interrupt while they load is recorded and raised as soon as they end (within about a
-second), as cleanly as one during the run.
+ignored, so a ``pinrate demo`` started that way would never hear Ctrl-C. The arguments are
+parsed first, with nothing heavy loaded (:mod:`.parser`: ``--help`` and a refused argument
+answer in a few tens of milliseconds); then the subcommand's module is imported, and with
+it what the command needs (numpy and Pinocchio, matplotlib for ``analyze`` and ``paper``).
+Those heavy imports happen inside the guarded region with signals deferred: an interrupt
+while they load is recorded and raised as soon as they end (within about a second), as
+cleanly as one during the run.
 """
 
 from __future__ import annotations
 
+import argparse
 import contextlib
+import logging
 import os
 import signal
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from types import FrameType
+from typing import ClassVar
+
+from .. import __version__
+from .parser import build_parser
 
 INTERRUPTED = 130
 TERMINATED = 143
@@ -53,7 +62,8 @@ class _Signals:
     """While True (the heavy imports), a signal is only recorded and raised when they end: an
     exception raised inside a pybind11 module's initialisation (matplotlib's ft2font) becomes
     "ImportError: initialization failed" and can abort the process."""
-    default_unraisable = staticmethod(sys.__unraisablehook__)
+    default_unraisable: ClassVar[Callable[[sys.UnraisableHookArgs], object]] = sys.__unraisablehook__
+    """The hook :meth:`unraisable` hands other reports to (the one it replaced)."""
 
     @classmethod
     def handle(cls, signum: int, frame: FrameType | None) -> None:
@@ -85,13 +95,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (see the module docstring)."""
     previous = _own_signals()
     try:
-        _Signals.deferring = True
         try:
-            from .commands import run  # inside the guard: importing Pinocchio takes a second
-        finally:
-            _Signals.deferring = False
-        _Signals.raise_swallowed()  # a signal while importing: deferred, or swallowed by an extension
-        return run(argv)
+            args = build_parser(_version).parse_args(argv)  # light: --help answers here
+        except SystemExit as finished:  # --help, --version, or a usage error already printed on one line
+            return finished.code if isinstance(finished.code, int) else 2
+        logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="pinrate: %(message)s")
+        with _signals_deferred():  # importing Pinocchio (and matplotlib) takes a second
+            from ..errors import PinrateError
+
+            run = _command(args.command)
+        try:
+            return int(run(args))
+        except PinrateError as error:  # a refused input: one line
+            print(f"pinrate: error: {error}", file=sys.stderr)
+            return 2
     except KeyboardInterrupt:
         _quiet_print("pinrate: interrupted")
         return INTERRUPTED
@@ -107,6 +124,40 @@ def main(argv: Sequence[str] | None = None) -> int:
         return BROKEN_PIPE
     finally:
         _restore_signals(previous)
+
+
+def _command(name: str) -> Callable[[argparse.Namespace], int]:
+    """The function that runs subcommand ``name``. Only here does its module load, and with it
+    what the command needs: numpy and Pinocchio for all, matplotlib for ``analyze`` and
+    ``paper``; the parser imports none of them."""
+    if name in ("analyze", "paper"):
+        from .reporting import COMMANDS
+    elif name == "teleop":
+        from .teleop import COMMANDS
+    else:
+        from .commands import COMMANDS
+    return COMMANDS[name]
+
+
+def _version() -> str:
+    """``--version``'s text: the version, and the path pinrate's loops take. Which path is
+    :mod:`pinrate.compiled`'s to say, and that package loads numpy and Pinocchio."""
+    with _signals_deferred():
+        from ..compiled import backend
+
+    return f"pinrate {__version__}\nbackend: {backend()}"
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """A block of heavy imports: a signal that arrives meanwhile is recorded and raised when
+    the block ends (see :attr:`_Signals.deferring`), also when an extension swallowed it."""
+    _Signals.deferring = True
+    try:
+        yield
+    finally:
+        _Signals.deferring = False
+    _Signals.raise_swallowed()
 
 
 def _own_signals() -> dict[int, object]:

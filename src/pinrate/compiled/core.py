@@ -62,7 +62,10 @@ def _import_core() -> tuple[ModuleType | None, str]:
         try:
             module = importlib.import_module(CORE_MODULE)
         except ImportError as error:
-            _loaded = (None, f"the compiled core is not installed ({error}); pip install ./core builds it")
+            _loaded = (
+                None,
+                f"the compiled core is not installed ({error}); `pip install ./core` in pinrate's source tree builds it",
+            )
         else:
             abi = getattr(module, "ABI", None)
             if abi != CORE_ABI:

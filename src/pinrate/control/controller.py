@@ -178,14 +178,14 @@ class Step:
 
 class _Limit(NamedTuple):  # a tuple: the per-step test reads it on Python floats
     joint: str
-    index: int  # into q
+    q_index: int  # into q
     velocity: int  # into v
     lower: float
     upper: float
 
     def onto_the_limit(self, q: np.ndarray, rate: float, dt: float) -> float:
         """The rate, cut so that the joint ends the step on its limit at most."""
-        value = q[self.index]
+        value = q[self.q_index]
         return min(max(rate, (self.lower - value) / dt), (self.upper - value) / dt)
 
 
@@ -497,7 +497,7 @@ class Controller:
             max_angular_speed=self.max_angular_speed,
             dt=self.dt,
             position_limits=self.position_limits,
-            limits=tuple((limit.index, limit.velocity, limit.lower, limit.upper) for limit in self._limits),
+            limits=tuple((limit.q_index, limit.velocity, limit.lower, limit.upper) for limit in self._limits),
             rate_limits=tuple(self._rate_limit_rows),
             exact_rcond=EXACT_RCOND,
             dls_damping=DLS_DAMPING,
@@ -591,7 +591,7 @@ class Controller:
 
     def _per_joint(self, limits: object, what: str) -> np.ndarray:
         """One positive limit per velocity component (nv,) from a number or an (nv,) array."""
-        if np.ndim(limits) == 0:
+        if np.ndim(limits) == 0:  # type: ignore[arg-type]  # any object: check_positive names a bad one
             value = check_positive(limits, what, allow_inf=True)
             return np.full(self.robot.nv, value)
         try:
@@ -1244,7 +1244,7 @@ class Controller:
         q_values, rate_values, dt = q.tolist(), rates.tolist(), self.dt
         passing = []
         for limit in self._limits:
-            value = q_values[limit.index] + rate_values[limit.velocity] * dt
+            value = q_values[limit.q_index] + rate_values[limit.velocity] * dt
             if (value > limit.upper or value < limit.lower) and limit not in skipped:
                 passing.append(limit)
         return passing
@@ -1322,10 +1322,10 @@ class Controller:
         """Clamp q in place to the limits; describe the first joint that was past one ('' if none)."""
         hit = ""
         for limit in self._limits:
-            value = q[limit.index]
+            value = q[limit.q_index]
             if value < limit.lower or value > limit.upper:
                 side, bound = ("lower", limit.lower) if value < limit.lower else ("upper", limit.upper)
-                q[limit.index] = bound
+                q[limit.q_index] = bound
                 hit = hit or f"{limit.joint} reached its {side} limit {bound:.4g}"
         return hit
 

@@ -339,7 +339,7 @@ class _Run:
             parts.append(f"rates scaled by {self.log.scale[step_number]:.3g} to meet the velocity limits")
         if flag & _CLAMPED:
             limit = self.controller.position_limit(int(self.log.hit[step_number]))
-            value = self.log.q[step_number + 1][limit.index]
+            value = self.log.q[step_number + 1][limit.q_index]
             side, bound = ("lower", limit.lower) if value == limit.lower else ("upper", limit.upper)
             parts.append(f"{limit.joint} reached its {side} limit {bound:.4g}")
         return "; ".join(parts)

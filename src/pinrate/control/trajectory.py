@@ -7,6 +7,7 @@ import os
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -103,18 +104,18 @@ class Trajectory:
             )
         }
         with target.open("wb") as stream:  # a file object: numpy would append ".npz" to a name
-            np.savez(
-                stream,
-                format=np.array(FORMAT),
-                status=np.array(self.status, dtype=str),
-                detail=np.array(self.detail, dtype=str),
-                arm=np.array(self.partition.arm, dtype=str),
-                wrist=np.array(self.partition.wrist, dtype=str),
-                converged=np.array(self.converged),
-                dt=np.array(self.dt),
+            entries: dict[str, Any] = {
+                "format": np.array(FORMAT),
+                "status": np.array(self.status, dtype=str),
+                "detail": np.array(self.detail, dtype=str),
+                "arm": np.array(self.partition.arm, dtype=str),
+                "wrist": np.array(self.partition.wrist, dtype=str),
+                "converged": np.array(self.converged),
+                "dt": np.array(self.dt),
                 **arrays,
                 **texts,
-            )
+            }
+            np.savez(stream, **entries)
         return target
 
     @classmethod

@@ -87,7 +87,7 @@ def _checked_dirs(package_dirs: object) -> list[str]:
     if isinstance(package_dirs, str | os.PathLike):
         package_dirs = [package_dirs]
     try:
-        folders = [Path(folder).expanduser() for folder in package_dirs]  # type: ignore[union-attr]
+        folders = [Path(folder).expanduser() for folder in package_dirs]  # type: ignore[attr-defined]
     except TypeError:
         raise InputError(f"package_dirs must be a list of folders, got {package_dirs!r}") from None
     for folder in folders:

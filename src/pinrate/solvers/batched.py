@@ -53,11 +53,11 @@ def inverse(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         )
     else:
         det = np.linalg.det(M)
-        singular = ~invertible(det, scale_squared)
+        singular = np.logical_not(invertible(det, scale_squared))
         inverses = np.linalg.inv(np.where(singular[:, None, None], np.eye(rows), M))
         inverses[singular] = 0.0
         return inverses, singular
-    singular = ~invertible(det, scale_squared)
+    singular = np.logical_not(invertible(det, scale_squared))
     inverses = adjugate / np.where(singular, 1.0, det)[:, None, None]
     inverses[singular] = 0.0
     return inverses, singular
@@ -88,17 +88,17 @@ def spectral_radius(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) 
     """
     if not pseudo_g_is_exact(A.shape[1], A.shape[2], W.shape[1], W.shape[2]):
         m, arm = A.shape[1], A.shape[2]
-        radii = []
+        per_configuration: list[float] = []
         for blocks in zip(A, B, U, W, strict=True):
             try:
-                radii.append(
+                per_configuration.append(
                     error_map(
                         np.block([[blocks[0], blocks[1]], [blocks[2], blocks[3]]]), m, arm, "mca1"
                     ).spectral_radius
                 )
             except SingularBlockError:
-                radii.append(np.inf)
-        return np.array(radii)
+                per_configuration.append(np.inf)
+        return np.array(per_configuration)
     A_inv, singular_A = inverse(A)
     W_inv, singular_W = inverse(W)
     P = U @ A_inv

@@ -15,6 +15,7 @@ sensor-frame Jacobian's rows (m/s and rad/s per unit joint rate).
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -126,7 +127,7 @@ Kernel = Callable[[Matrix, Matrix, Matrix, Matrix, Vector, Vector], tuple[Vector
 """(A, B, U, W, v, Ω) -> (arm rates, wrist rates)."""
 
 
-def blocks(jacobian: np.ndarray, selectors: tuple[object, ...]) -> Blocks:
+def blocks(jacobian: np.ndarray, selectors: tuple[Any, ...]) -> Blocks:
     """(A, B, U, W) of eq. 19 as nested lists, from the sensor-frame Jacobian (6, nv) and the
     partition's selectors (:attr:`pinrate.kinematics.PartitionIndex.selectors`)."""
     a, b, u, w = selectors

@@ -41,7 +41,7 @@ def inverse_condition_bound(M: np.ndarray | list[list[float]], M_inverse: np.nda
         inverse_norm2 = float(np.vdot(inverse, inverse))
     else:
         matrix_norm2 = sum(value * value for row in M for value in row)
-        inverse_norm2 = sum(value * value for row in M_inverse for value in row)  # type: ignore[union-attr]
+        inverse_norm2 = sum(value * value for row in M_inverse for value in row)
     product = matrix_norm2 * inverse_norm2
     if not product > 0.0 or not math.isfinite(product):
         return 0.0

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 import numpy as np
 
@@ -127,7 +128,7 @@ class Teleop:
         """The controller's keyword options (a copy)."""
         return dict(self._options)
 
-    def _controller(self, options: dict[str, object]) -> Controller:
+    def _controller(self, options: dict[str, Any]) -> Controller:
         return Controller(
             self.robot, max_linear_speed=self.max_linear_speed, max_angular_speed=self.max_angular_speed, **options
         )

@@ -48,8 +48,10 @@ class SceneCommands:
                 for table in (self._objects, self._transforms):
                     for key in [key for key in table if key == path or key.startswith(path + "/")]:
                         del table[key]
-                for key in [key for key in self._properties if key[0] == path or key[0].startswith(path + "/")]:
-                    del self._properties[key]
+                for owner in [
+                    owner for owner in self._properties if owner[0] == path or owner[0].startswith(path + "/")
+                ]:
+                    del self._properties[owner]
 
     def packed(self) -> list[bytes]:
         """The scene as packed commands, in the order a viewer must run them."""
