@@ -64,7 +64,7 @@ def _import_core() -> tuple[ModuleType | None, str]:
         except ImportError as error:
             _loaded = (
                 None,
-                f"the compiled core is not installed ({error}); `pip install ./core` in pinrate's source tree builds it",
+                f"the compiled core is not installed ({error}); `pip install ./core` in pinrate's source builds it",
             )
         else:
             abi = getattr(module, "ABI", None)
