@@ -9,14 +9,22 @@
   (no iframe: it would take the keyboard's focus) and receives the scene's commands, packed
   as meshcat's server sends them, when it connects; then one JSON frame per render tick.
   The page sends its held keys, its gamepad and its speed slider every 50 ms (the heartbeat)
-  and at every change. Every HTTP request's ``Host`` and every WebSocket's ``Origin`` must
-  name this server (DNS rebinding). The first page controls; the others watch until the
-  control is free and they take it.
+  and at every change, each stamped with the page's clock. Who may connect is
+  :mod:`.access`'s rule (Host and Origin on every request and handshake, a token off
+  loopback, no framing). The first page controls; the others watch until the control is
+  free and they take it. What one client can cost is capped: :data:`MAX_PAGES` sockets,
+  :data:`MAX_CONNECTIONS` HTTP connections (the oldest goes first), :data:`HEADER_TIMEOUT`
+  to send a request's headers, :data:`MESSAGE_RATE` messages a second; the scene is encoded
+  once and sent to each page one chunk at a time, and a page still busy with a frame skips
+  the next.
 - **control**: :meth:`Teleop.tick` at the controller's rate (1/dt), sleeping to absolute
   deadlines; a late wake-up runs the missed ticks (at most 0.1 s of them), so the motion
   follows the wall clock. Buttons reach it through a queue, so only this thread touches the
   Teleop and the robot's ``pin.Data``. A controlling page that is gone or silent for longer
-  than the Teleop's timeout stops the robot (the dead man; a reversal too).
+  than the Teleop's timeout stops the robot (the dead man; a reversal too). A command is
+  aged from when the page sent it, not from when it was read, so a backlog never keeps the
+  robot moving. An exception in a tick halts the robot, is said once on the page and in the
+  terminal, and the console goes on (resume is the operator's decision).
 - **render**: at most ``render_rate`` frames per second, only when something changed, each
   link's pose from the viewer's own ``pin.Data``; a page still busy with the last frame
   skips this one.
@@ -33,16 +41,17 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import ipaddress
 import json
+import logging
 import math
 import queue
 import socket
 import sys
 import threading
 import time
+import traceback
+import warnings
 from collections import deque
-from collections.abc import Callable
 from datetime import datetime
 from pathlib import Path
 from typing import Any
@@ -50,6 +59,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 import tornado.httpserver
+import tornado.iostream
 import tornado.netutil
 import tornado.web
 import tornado.websocket
@@ -60,6 +70,7 @@ from ..errors import InputError, PinrateError
 from ..viewer import Viewer
 from ..viewer.offline import MAIN_JS
 from ..viewer.server import check_host
+from .access import SECURITY_HEADERS, AccessPolicy
 from .display import describe, joint_gauges, joint_values
 from .mapping import KEYS, deflections
 from .recording import Recording
@@ -77,6 +88,30 @@ STATS_WINDOW = 2.0
 
 REPLAY_FPS = 30.0
 """Frames per second of a recording's HTML replay."""
+
+MAX_PAGES = 8
+"""WebSocket clients (pages) connected at once; the next is refused (503)."""
+
+MAX_CONNECTIONS = 64
+"""HTTP connections open at once; a new one beyond closes the oldest (so half-sent requests
+cannot lock the operator's page out)."""
+
+HEADER_TIMEOUT = 10.0
+"""Seconds a connection has to send a request's headers (and an idle keep-alive to stay)."""
+
+MESSAGE_RATE = 100.0
+"""Messages a second a page may send on average (its heartbeat is 20, plus one per change);
+:data:`MESSAGE_BURST` at once. Beyond, messages are dropped; a page that keeps flooding for
+:data:`FLOOD_LIMIT` dropped messages is disconnected."""
+
+MESSAGE_BURST = 200.0
+FLOOD_LIMIT = 1000
+
+CLOCK_DRIFT = 1e-3
+"""s/s: how fast the estimated offset between a page's clock and the server's may grow
+(clock rates differ by well under 1e-4 on NTP-disciplined machines)."""
+
+LOG = logging.getLogger("pinrate.teleop")
 
 SWITCH_INTERVAL = 2e-4
 """Seconds a thread holding the GIL runs before a waiting one may take it, while a console
@@ -118,79 +153,171 @@ class LoopStats:
         }
 
 
-def _allowed_hosts(host: str, port: int) -> Callable[[str], bool]:
-    """A test of a request's Host header (``name:port``): this server's own address, and on
-    loopback also ``localhost``; on a shared address any IP literal or this machine's names."""
-    names = {host.lower()}
-    loopback = ipaddress.ip_address(socket.gethostbyname(host)).is_loopback
-    if loopback:
-        names |= {"127.0.0.1", "localhost", "[::1]"}
-    else:
-        names |= {socket.gethostname().lower(), socket.getfqdn().lower()}
-
-    def allowed(header: str) -> bool:
-        name, _, given_port = header.strip().lower().rpartition(":")
-        if not name or given_port != str(port):
-            return False
-        if name in names:
-            return True
-        if loopback:
-            return False
-        try:
-            ipaddress.ip_address(name.strip("[]"))
-        except ValueError:
-            return False
-        return True
-
-    return allowed
+def _retrieved(future: Any) -> None:
+    """Done callback of every write and task: its failure (a page gone) is read, so asyncio
+    never reports it as never retrieved; a page gone mid-write is no error."""
+    if not future.cancelled():
+        future.exception()
 
 
-class _HostChecked:
-    """Every HTTP request must name this server in its Host header (DNS rebinding)."""
+class _Busy:
+    """A page's pending write while its scene is still being sent: never done."""
 
+    @staticmethod
+    def done() -> bool:
+        return False
+
+
+def _listed(value: object) -> list[Any]:
+    """A message's list field, or [] when it is anything else."""
+    return list(value) if isinstance(value, list) else []
+
+
+class _Guarded(tornado.web.RequestHandler):
+    """Every response carries :data:`~.access.SECURITY_HEADERS`; every request must name this
+    server in its Host header (DNS rebinding), and, where ``needs_token``, carry the token."""
+
+    needs_token = False
     server: TeleopServer
-    request: Any
 
-    def prepare(self) -> None:
-        if not self.server.host_allowed(self.request.host):
-            raise tornado.web.HTTPError(403, reason="Host not allowed")
-
-
-class _Page(_HostChecked, tornado.web.RequestHandler):
     def initialize(self, server: TeleopServer) -> None:
         self.server = server
 
+    def set_default_headers(self) -> None:
+        for name, value in SECURITY_HEADERS.items():
+            self.set_header(name, value)
+
+    def prepare(self) -> None:
+        policy = self.server.access
+        if not policy.host_allowed(self.request.host):
+            raise tornado.web.HTTPError(403, reason="Host not allowed")
+        if self.needs_token and not policy.token_allowed(self.get_query_argument("token", None)):
+            raise tornado.web.HTTPError(403, reason="this console needs the URL it printed, with its token")
+
+    def write_error(self, status_code: int, **kwargs: Any) -> None:
+        self.set_header("Content-Type", "text/plain; charset=utf-8")
+        self.finish(f"{status_code} {self._reason}\n")  # never a traceback
+
+
+class _Missing(_Guarded):
+    """Every other path: 404 (with the security headers)."""
+
+    def get(self, *args: str) -> None:
+        raise tornado.web.HTTPError(404)
+
+
+class _Page(_Guarded):
+    needs_token = True
+
     def get(self) -> None:
         self.set_header("Content-Type", "text/html; charset=utf-8")
-        self.set_header("Cache-Control", "no-store")
-        self.write((STATIC / "index.html").read_bytes())
+        self.write(self.server.files["index.html"][1])
 
 
-class _Static(_HostChecked, tornado.web.StaticFileHandler):
-    def initialize(self, path: str, server: TeleopServer, default_filename: str | None = None) -> None:  # type: ignore[override]
-        super().initialize(path, default_filename)
-        self.server = server
+class _File(_Guarded):
+    """The console's own files, read once at start: nothing else on disk is reachable."""
+
+    def get(self, name: str) -> None:
+        entry = self.server.files.get(name)
+        if entry is None or name == "index.html":
+            raise tornado.web.HTTPError(404)
+        self.set_header("Content-Type", entry[0])
+        self.write(entry[1])
+
+
+class _Recording(_Guarded):
+    """A file this server wrote (a recording's .npz or .html), by name; nothing else."""
+
+    needs_token = True
+
+    def get(self, name: str) -> None:
+        path = self.server.served.get(name)
+        if path is None:
+            raise tornado.web.HTTPError(404)
+        try:
+            content = path.read_bytes()
+        except OSError:
+            raise tornado.web.HTTPError(404) from None
+        kind = "text/html; charset=utf-8" if path.suffix == ".html" else "application/octet-stream"
+        self.set_header("Content-Type", kind)
+        if path.suffix != ".html":
+            self.set_header("Content-Disposition", f'attachment; filename="{path.name}"')
+        self.write(content)
 
 
 class _Socket(tornado.websocket.WebSocketHandler):
+    """One page. The handshake passes :class:`_Guarded`'s checks, the Origin rule and the cap."""
+
     def initialize(self, server: TeleopServer) -> None:
         self.server = server
         self.pending: Any = None  # the last frame's write, not yet done
         self.client_id = 0
+        self.allowance = MESSAGE_BURST
+        self.refilled = time.monotonic()
+        self.dropped = 0
+        self.clock_offset = math.inf  # the least (arrival - the page's stamp) seen, s
+        self.offset_at = 0.0  # when clock_offset was last updated (monotonic s)
+
+    def set_default_headers(self) -> None:
+        for name, value in SECURITY_HEADERS.items():
+            self.set_header(name, value)
+
+    def prepare(self) -> None:
+        policy = self.server.access
+        if not policy.host_allowed(self.request.host):
+            raise tornado.web.HTTPError(403, reason="Host not allowed")
+        if not policy.origin_allowed(self.request.headers.get("Origin"), self.request.host):
+            raise tornado.web.HTTPError(403, reason="Origin not allowed")
+        if not policy.token_allowed(self.get_query_argument("token", None)):
+            raise tornado.web.HTTPError(403, reason="token missing or wrong")
+        if len(self.server._clients) >= MAX_PAGES:
+            raise tornado.web.HTTPError(503, reason=f"{MAX_PAGES} pages are connected already")
 
     def check_origin(self, origin: str) -> bool:
-        scheme, _, rest = origin.partition("://")
-        return scheme == "http" and self.server.host_allowed(rest) and self.server.host_allowed(self.request.host)
+        return self.server.access.origin_allowed(origin, self.request.host)
 
     def open(self, *args: str, **kwargs: str) -> None:
         self.set_nodelay(True)
         self.server._open(self)
 
     def on_message(self, message: str | bytes) -> None:
-        self.server._message(self, message)
+        now = time.monotonic()
+        self.allowance = min(MESSAGE_BURST, self.allowance + (now - self.refilled) * MESSAGE_RATE)
+        self.refilled = now
+        if self.allowance >= MESSAGE_BURST:
+            self.dropped = 0  # calm again: the flood is over
+        if self.allowance < 1.0:
+            self.dropped += 1
+            if self.dropped >= FLOOD_LIMIT:
+                self.close(1008, "too many messages")
+            return
+        self.allowance -= 1.0
+        try:
+            self.server._message(self, message, now)
+        except Exception:  # a message must never take the socket (or the console) down
+            LOG.debug("unreadable message", exc_info=True)
+            self.server._send(self, {"type": "event", "level": "error", "text": "unreadable message"})
 
     def on_close(self) -> None:
         self.server._close(self)
+
+
+class _Server(tornado.httpserver.HTTPServer):
+    """At most :data:`MAX_CONNECTIONS` HTTP connections (a socket that became a WebSocket
+    leaves tornado's count, and :data:`MAX_PAGES` caps those): a new one beyond closes the
+    oldest, so connections that never finish their headers cannot lock the page out."""
+
+    def handle_stream(self, stream: tornado.iostream.IOStream, address: tuple[Any, ...]) -> None:
+        live: set[Any] = self._connections  # tornado's own: HTTP1ServerConnection objects
+        order: dict[Any, None] = getattr(self, "_pinrate_order", {})
+        self._pinrate_order = order = {connection: None for connection in order if connection in live}
+        while len(order) >= MAX_CONNECTIONS:
+            oldest = next(iter(order))
+            del order[oldest]
+            oldest.stream.close()
+        known = set(live)
+        super().handle_stream(stream, address)
+        order.update(dict.fromkeys(live - known))
 
 
 class TeleopServer:
@@ -198,11 +325,20 @@ class TeleopServer:
 
     Args:
         teleop: what the console drives; its controller's dt sets the loop's rate.
-        host: the address to listen on (127.0.0.1: this machine only; another one is warned
-            about, as anyone who reaches it can drive the robot).
+        host: the address to listen on (127.0.0.1: this machine only). Another one (``0.0.0.0``:
+            every interface) gets a random token in :attr:`url`, and a warning: whoever has
+            that URL and reaches the address can drive the robot.
         port: the TCP port; 0 picks a free one.
         render_rate: frames per second sent to the pages at most.
-        record_dir: folder where recorded runs are saved (``.npz`` and ``.html``).
+        record_dir: folder where recorded runs are saved (``.npz`` and ``.html``); only the
+            files this server writes there are served.
+        token: the URL's token (see :class:`~.access.AccessPolicy`): None chooses (a random
+            one off loopback, none on it).
+
+    Attributes:
+        url: the console's URL: a real address, the port and the token when there is one.
+        access: the :class:`~.access.AccessPolicy` every request and handshake passes.
+        saved: the files recordings wrote, in order.
     """
 
     def __init__(
@@ -213,19 +349,34 @@ class TeleopServer:
         port: int = 0,
         render_rate: float = RENDER_RATE,
         record_dir: str | Path = ".",
+        token: str | None = None,
     ) -> None:
         if not isinstance(teleop, Teleop):
             raise InputError(f"TeleopServer takes a pinrate.Teleop, not {type(teleop).__name__}")
         self.teleop = teleop
         self.robot = teleop.robot
-        self.host = check_host(host)
+        with warnings.catch_warnings():  # check_host's warning speaks of a viewer; ours follows
+            warnings.simplefilter("ignore")
+            self.host = check_host(host)
         if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
             raise InputError(f"port must be an integer in [0, 65535], got {port!r}")
         self.render_rate = check_positive(render_rate, "render_rate")
         self.record_dir = check_output_folder(record_dir, "record folder")
         self.stats = LoopStats()
         self.saved: list[Path] = []
-        """Files written by recordings, in order."""
+        self.served: dict[str, Path] = {}
+        """What ``/recordings/NAME`` may return: the files this server wrote, by name."""
+        self.files = {
+            "index.html": ("text/html; charset=utf-8", (STATIC / "index.html").read_bytes()),
+            "teleop.js": ("text/javascript; charset=utf-8", (STATIC / "teleop.js").read_bytes()),
+            "teleop.css": ("text/css; charset=utf-8", (STATIC / "teleop.css").read_bytes()),
+            "main.min.js": ("text/javascript; charset=utf-8", MAIN_JS.read_bytes()),
+        }
+        """The console's own files (content type, bytes), read once: all it serves besides
+        the recordings."""
+        self._saving: list[threading.Thread] = []
+        self._save_lock = threading.Lock()
+        self._failure = ""  # the last control-loop failure said, so that a repeat is said once
         self._actions: queue.SimpleQueue[tuple[str, dict[str, Any], _Socket | None]] = queue.SimpleQueue()
         self._clients: list[_Socket] = []
         self._controller: _Socket | None = None
@@ -243,6 +394,7 @@ class TeleopServer:
         self.viewer.draw_hand_axes()
         self.viewer.frame(teleop.q)
         self.viewer.show(teleop.q, record=False)
+        self._scene = self.viewer.scene.packed()  # type: ignore[union-attr]  # encoded once, shared by every page
         self._gauges = joint_gauges(self.robot)
 
         try:
@@ -251,8 +403,19 @@ class TeleopServer:
             raise PinrateError(f"cannot listen on {self.host}:{port}: {error.strerror or error}") from None
         self._sockets = sockets
         self.port = int(sockets[0].getsockname()[1])
-        self.url = f"http://{self.host}:{self.port}/"
-        self.host_allowed = _allowed_hosts(self.host, self.port)
+        try:
+            self.access = AccessPolicy(self.host, self.port, token)
+        except ValueError as error:
+            for sock in sockets:
+                sock.close()
+            raise InputError(f"TeleopServer on {self.host}: {error}") from None
+        self.url = self.access.url
+        if not self.access.loopback:
+            warnings.warn(
+                f"the teleop console listens on {self.host}: whoever has its URL (it carries a token) "
+                "and can reach this machine can drive the robot",
+                stacklevel=2,
+            )
         self._loop: asyncio.AbstractEventLoop | None = None
         self._web_ready = threading.Event()
         self._threads = [
@@ -296,6 +459,8 @@ class TeleopServer:
                 thread.join(timeout=5)
         if self.teleop.recording:
             self._save(self.teleop.stop_recording())
+        for saving in list(self._saving):  # a save started just before: its files are written whole
+            saving.join(timeout=60)
         loop = self._loop
         if loop is not None and loop.is_running():
             loop.call_soon_threadsafe(loop.stop)
@@ -346,14 +511,22 @@ class TeleopServer:
             [
                 (r"/", _Page, {"server": self}),
                 (r"/ws", _Socket, {"server": self}),
-                (r"/static/(.*)", _Static, {"path": str(STATIC), "server": self}),
-                (r"/meshcat/(main\.min\.js)", _Static, {"path": str(MAIN_JS.parent), "server": self}),
-                (r"/recordings/(.*)", _Static, {"path": str(self.record_dir), "server": self}),
+                (r"/static/(teleop\.js|teleop\.css)", _File, {"server": self}),
+                (r"/meshcat/(main\.min\.js)", _File, {"server": self}),
+                (r"/recordings/([^/]+)", _Recording, {"server": self}),
             ],
+            default_handler_class=_Missing,
+            default_handler_args={"server": self},
             websocket_max_message_size=1 << 16,
             log_function=lambda handler: None,  # the console is the log; tornado's access lines are noise
         )
-        http = tornado.httpserver.HTTPServer(app)
+        http = _Server(
+            app,
+            idle_connection_timeout=HEADER_TIMEOUT,  # tornado's header timeout (default 3600 s)
+            body_timeout=HEADER_TIMEOUT,
+            max_header_size=16 << 10,
+            max_body_size=64 << 10,
+        )
         http.add_sockets(self._sockets)
         loop.call_soon(self._web_ready.set)
         try:
@@ -367,12 +540,18 @@ class TeleopServer:
                 loop.run_until_complete(asyncio.sleep(0))
             loop.close()
 
-    def _send(self, client: _Socket, message: dict[str, Any] | bytes) -> None:
-        with contextlib.suppress(tornado.websocket.WebSocketClosedError):
+    def _send(self, client: _Socket, message: dict[str, Any] | bytes) -> Any:
+        """Write one message to a page; the write's future (its failure, a page gone
+        mid-write, is retrieved here: never a "Task exception was never retrieved")."""
+        try:
             if isinstance(message, bytes):
-                client.write_message(message, binary=True)
+                written = client.write_message(message, binary=True)
             else:
-                client.write_message(json.dumps(message))
+                written = client.write_message(json.dumps(message))
+        except tornado.websocket.WebSocketClosedError:
+            return None
+        written.add_done_callback(_retrieved)
+        return written
 
     def _hello(self, client: _Socket) -> dict[str, Any]:
         teleop = self.teleop
@@ -410,8 +589,23 @@ class TeleopServer:
             self._controller = client
             self._last_heard = time.monotonic()
         self._send(client, self._hello(client))
-        for packed in self.viewer.scene.packed():  # type: ignore[union-attr]
-            self._send(client, packed)
+        loop = self._loop
+        if loop is not None:
+            loop.create_task(self._send_scene(client)).add_done_callback(_retrieved)
+
+    async def _send_scene(self, client: _Socket) -> None:
+        """The shared encoded scene, one chunk at a time (a page that does not read holds one
+        chunk, not the scene), then the page's role; frames start after it."""
+        client.pending = _Busy()  # no frame until the scene is there
+        for packed in self._scene:
+            written = self._send(client, packed)
+            if written is None:
+                return
+            with contextlib.suppress(tornado.websocket.WebSocketClosedError, tornado.iostream.StreamClosedError):
+                await written
+            if client not in self._clients:
+                return
+        client.pending = None
         self._send(client, self._role(client))
         self._changed.set()  # a fresh frame for the new page
 
@@ -424,41 +618,58 @@ class TeleopServer:
             for other in self._clients:
                 self._send(other, self._role(other))
 
-    def _message(self, client: _Socket, message: str | bytes) -> None:
-        try:
-            data = json.loads(message)
-            kind = data["type"]
-        except (ValueError, TypeError, KeyError):
-            self._send(client, {"type": "event", "level": "error", "text": "unreadable message"})
-            return
+    def _message(self, client: _Socket, message: str | bytes, arrived: float) -> None:
+        """One message from a page, read at ``arrived`` (monotonic s). Unreadable ones (not
+        JSON, too deep, not an object) raise; :meth:`_Socket.on_message` answers them."""
+        data = json.loads(message)
+        if not isinstance(data, dict) or not isinstance(data.get("type"), str):
+            raise ValueError("not a message")
+        kind = data["type"]
         if kind == "claim":
             if self._controller is None:
                 self._controller = client
-                self._last_heard = time.monotonic()
-            for other in self._clients:
-                self._send(other, self._role(other))
+                self._last_heard = arrived
+                for other in self._clients:  # only a change of hands is news
+                    self._send(other, self._role(other))
             return
         if client is not self._controller:
             return  # watchers watch
-        self._last_heard = time.monotonic()
+        sent = self._sent_at(client, data.get("sent"), arrived)
+        self._last_heard = sent
         if kind == "input":
-            self._input(data)
+            self._input(data, sent)
         else:
-            self._actions.put((str(kind), data, client))
+            self._actions.put((kind, data, client))
 
-    def _input(self, data: dict[str, Any]) -> None:
+    @staticmethod
+    def _sent_at(client: _Socket, stamp: object, arrived: float) -> float:
+        """When the page sent a message, on this process's monotonic clock: the page's own
+        stamp (``sent``, ms of its ``performance.now()``) plus the smallest offset seen
+        between the two clocks (the least delay), which may grow by :data:`CLOCK_DRIFT` a
+        second. A backlog of old messages so reads as old: the dead man counts from sending.
+        Without a stamp, the arrival."""
+        if isinstance(stamp, bool) or not isinstance(stamp, int | float) or not math.isfinite(stamp):
+            return arrived
+        page_time = float(stamp) / 1000.0
+        elapsed = max(0.0, arrived - client.offset_at)
+        client.clock_offset = min(client.clock_offset + CLOCK_DRIFT * elapsed, arrived - page_time)
+        client.offset_at = arrived
+        return min(arrived, page_time + client.clock_offset)
+
+    def _input(self, data: dict[str, Any], sent: float) -> None:
         try:
             speed = min(max(float(data.get("speed", 1.0)), 0.0), 1.0)
             if not math.isfinite(speed):
                 speed = 0.0
-            keys = [str(code) for code in data.get("keys", [])][:32]
-            axes = list(data.get("axes", []))[:16]
-            buttons = list(data.get("buttons", []))[:32]
-            seq = int(data.get("seq", 0))
-        except (TypeError, ValueError):
+            keys = [str(code) for code in _listed(data.get("keys"))][:32]
+            axes = _listed(data.get("axes"))[:16]
+            buttons = _listed(data.get("buttons"))[:32]
+            seq = data.get("seq", 0)
+            seq = int(seq) if isinstance(seq, int | float) and math.isfinite(seq) else self._input_seq
+        except (TypeError, ValueError, OverflowError):
             return
         deflection = deflections(keys, axes, buttons) * speed
-        self.teleop.command(deflection[:3], deflection[3:], now=time.monotonic())
+        self.teleop.command(deflection[:3], deflection[3:], now=sent)
         self._input_seq = seq
 
     # ------------------------------------------------------------------ control thread
@@ -485,11 +696,10 @@ class TeleopServer:
             before = teleop.q
             before_status = None if teleop.last is None else teleop.last.status
             try:
-                for _ in range(ticks):
-                    teleop.tick(now)
-            except PinrateError as error:  # never for what the robot does; a bug would land here
-                teleop.halt()
-                self._event(f"halted: {error}", "error")
+                for tick in range(ticks):  # each missed tick at its own time (the recording's times)
+                    teleop.tick(now - (ticks - 1 - tick) * period)
+            except Exception as error:  # a bug: the robot halts, the console goes on
+                self._failed(error)
             owed -= ticks * period
             self._applied_seq = applied_seq
             if ticks and (
@@ -507,6 +717,22 @@ class TeleopServer:
             elif delay < -MAX_CATCH_UP:
                 deadline = time.monotonic()  # far behind: start afresh rather than race
 
+    def _failed(self, error: BaseException) -> None:
+        """A tick raised: halt the robot, say so once on the pages and in the terminal (with
+        the traceback there), and keep serving: the operator may resume or go home."""
+        with contextlib.suppress(Exception):
+            self.teleop.stop()
+        try:
+            self.teleop.halt()
+        except Exception:  # halted whatever the Teleop's state
+            self.teleop.halted = True
+        text = f"the control loop failed ({type(error).__name__}: {error}); the robot is halted"
+        if text != self._failure:
+            self._failure = text
+            LOG.error("%s\n%s", text, "".join(traceback.format_exception(error)).rstrip())
+            self._event(text, "error")
+        self._changed.set()
+
     def _run_actions(self) -> None:
         while True:
             try:
@@ -517,6 +743,11 @@ class TeleopServer:
                 self._act(action, data)
             except PinrateError as error:
                 self._event(f"{action}: {error}", "error", client)
+            except Exception as error:  # a bug: as for a tick
+                self._failed(error)
+            else:
+                if action == "resume":
+                    self._failure = ""
             self._changed.set()
 
     def _act(self, action: str, data: dict[str, Any]) -> None:
@@ -540,7 +771,12 @@ class TeleopServer:
                     self._event("recording")
             elif teleop.recording:
                 recording = teleop.stop_recording()
-                threading.Thread(target=self._save, args=(recording,), daemon=True).start()
+                if not len(recording):
+                    self._event("recording stopped: no tick was recorded, nothing saved", "warning")
+                    return
+                saving = threading.Thread(target=self._save, args=(recording,), name="pinrate-teleop-save", daemon=True)
+                self._saving = [thread for thread in self._saving if thread.is_alive()] + [saving]
+                saving.start()
         elif action == "frame":
             teleop.frame = str(data.get("frame"))
         elif action == "configure":
@@ -550,10 +786,28 @@ class TeleopServer:
         else:
             raise InputError(f"unknown action {action!r}")
 
+    def _stem(self) -> Path:
+        """A new file stem in the record folder, ``teleop-ROBOT-YYYYmmdd-HHMMSS[-N]``: no
+        file of a recording (.npz, .html) has it yet, so two runs never overwrite each other."""
+        stamp = datetime.now().strftime("%Y%m%d-%H%M%S")
+        base = f"teleop-{self.robot.name}-{stamp}"
+        for number in range(1, 10_000):
+            stem = self.record_dir / (base if number == 1 else f"{base}-{number}")
+            if not any(stem.with_suffix(suffix).exists() for suffix in (".npz", ".html")):
+                return stem
+        raise PinrateError(f"no free file name for a recording in {self.record_dir}")
+
     def _save(self, recording: Recording) -> None:
         """Write a recorded run as .npz and as a standalone HTML replay; tell the pages."""
-        stamp = datetime.now().strftime("%Y%m%d-%H%M%S")
-        stem = self.record_dir / f"teleop-{self.robot.name}-{stamp}"
+        try:
+            with self._save_lock:  # one save at a time: the names stay unique
+                self._write(recording)
+        except Exception as error:  # said, never a dead thread's traceback
+            self._event(f"the recording could not be saved: {error}", "error")
+            LOG.error("the recording could not be saved", exc_info=error)
+
+    def _write(self, recording: Recording) -> None:
+        stem = self._stem()
         try:
             data = recording.save(stem.with_suffix(".npz"))
             replay = Viewer(self.robot, offline=True)
@@ -568,10 +822,16 @@ class TeleopServer:
             self._event(f"the recording could not be saved: {error}", "error")
             return
         self.saved += [data, page]
+        self.served.update({data.name: data, page.name: page})
         self._event(
             f"saved {len(recording)} ticks: {data.name}, {page.name}",
-            links=[f"/recordings/{data.name}", f"/recordings/{page.name}"],
+            links=[self._link(data.name), self._link(page.name)],
         )
+
+    def _link(self, name: str) -> str:
+        """The page-relative URL of a recording file (with the token when there is one)."""
+        token = self.access.token
+        return f"/recordings/{name}" + (f"?token={token}" if token else "")
 
     def _event(
         self, text: str, level: str = "info", client: _Socket | None = None, links: list[str] | None = None

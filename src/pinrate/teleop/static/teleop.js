@@ -17,9 +17,14 @@
   };
   window.pinrate = state;
 
-  const socket = new WebSocket(`ws://${location.host}/ws`);
+  // Off loopback the server printed a URL with a token: the socket carries it too.
+  const token = new URLSearchParams(location.search).get("token");
+  const socket = new WebSocket(`ws://${location.host}/ws` + (token ? `?token=${encodeURIComponent(token)}` : ""));
   socket.binaryType = "arraybuffer";
-  const send = (message) => { if (socket.readyState === 1) socket.send(JSON.stringify(message)); };
+  // Every message carries the page's clock: the server ages commands from their sending.
+  const send = (message) => {
+    if (socket.readyState === 1) socket.send(JSON.stringify({ ...message, sent: performance.now() }));
+  };
   socket.onopen = () => { state.connected = true; };
   socket.onclose = () => {
     state.connected = false;
