@@ -11,6 +11,8 @@ import pytest
 
 import pinrate
 from pinrate import InputError, Status, Teleop
+from pinrate.control.singularity import STRATEGIES, WRIST_STRATEGIES
+from support import EPS, fuzz_count
 
 DT = 0.01
 
@@ -229,6 +231,105 @@ def test_recording_keeps_every_tick_and_saves(ur5, tmp_path):
         teleop.stop_recording()
 
 
+def retrace(teleop: Teleop, now: float, limit: int = 10_000) -> tuple[float, int]:
+    """Tick until the reversal ends (at most ``limit`` ticks); (now, ticks)."""
+    ticks = 0
+    while teleop.reversing and ticks < limit:
+        now += DT
+        teleop.tick(now)
+        ticks += 1
+    assert not teleop.reversing
+    return now, ticks
+
+
+def half_reversed(teleop: Teleop) -> tuple[np.ndarray, float]:
+    """From the start, 60 ticks along x, then half of that retraced; (start, now)."""
+    start = teleop.q.copy()
+    now = drive(teleop, [1, 0, 0], [0, 0, 0], 60)
+    assert teleop.reverse(now)
+    for _ in range(30):
+        now += DT
+        teleop.tick(now)
+    assert teleop.reversing
+    return start, now
+
+
+def test_a_mark_during_a_reversal_waits_for_its_end(ur5):
+    teleop = Teleop(ur5, dt=DT)
+    start, now = half_reversed(teleop)
+    teleop.mark()  # the operator marks while the robot retraces: it keeps retracing
+    assert teleop.reversing
+    now, ticks = retrace(teleop, now)
+    assert ticks == pytest.approx(30, abs=2)  # the rest of the way, at the recorded pace
+    np.testing.assert_allclose(teleop.q, start, atol=1e-9)
+    assert not teleop.reverse(now)  # the new segment starts here: nothing to retrace yet
+    now = drive(teleop, [0, 1, 0], [0, 0, 0], 20, now)
+    assert teleop.reverse(now)
+    retrace(teleop, now)
+    np.testing.assert_allclose(teleop.q, start, atol=1e-9)
+
+
+@pytest.mark.parametrize("end", ["command", "stop", "halt"])
+def test_a_mark_during_a_reversal_starts_the_segment_where_it_was_ended(ur5, end):
+    teleop = Teleop(ur5, dt=DT)
+    _, now = half_reversed(teleop)
+    teleop.mark()
+    if end == "command":
+        teleop.command([0, 0, 1], [0, 0, 0], now=now + DT)
+        there = teleop.q.copy()
+        now = drive(teleop, [0, 0, 1], [0, 0, 0], 20, now + DT)
+    else:
+        getattr(teleop, end)()
+        there = teleop.q.copy()
+        teleop.resume()
+        now = drive(teleop, [0, 0, 1], [0, 0, 0], 20, now)
+    assert not teleop.reversing
+    assert teleop.reverse(now)
+    retrace(teleop, now)
+    np.testing.assert_allclose(teleop.q, there, atol=1e-9)  # not back to the old start
+
+
+def test_recording_during_a_reversal_keeps_its_ticks_and_marks_at_its_end(ur5):
+    teleop = Teleop(ur5, dt=DT)
+    start, now = half_reversed(teleop)
+    there = teleop.q.copy()
+    teleop.start_recording()  # R pressed while B runs
+    assert teleop.reversing and teleop.recording
+    now, ticks = retrace(teleop, now)
+    np.testing.assert_allclose(teleop.q, start, atol=1e-9)
+    now = drive(teleop, [0, 1, 0], [0, 0, 0], 10, now)
+    recording = teleop.stop_recording()
+    assert len(recording) == ticks + 10
+    np.testing.assert_array_equal(recording.start, there)
+    np.testing.assert_allclose(recording.q[ticks - 1], start, atol=1e-9)  # the reversal is in the run
+    assert teleop.reverse(now)
+    retrace(teleop, now)
+    np.testing.assert_allclose(teleop.q, start, atol=1e-9)  # the segment began where the reversal ended
+
+
+def test_reverse_and_configure_during_a_reversal_let_it_go_on(ur5):
+    teleop = Teleop(ur5, dt=DT)
+    start, now = half_reversed(teleop)
+    distance = float(np.linalg.norm(teleop.q - start))
+    assert teleop.reverse(now)  # pressed again: it goes on, not back to where it began
+    teleop.configure(singularity="freeze")
+    assert teleop.reversing
+    now += DT
+    teleop.tick(now)
+    assert np.linalg.norm(teleop.q - start) < distance
+    retrace(teleop, now)
+    np.testing.assert_allclose(teleop.q, start, atol=1e-9)
+
+
+def test_a_recording_is_not_restarted_unsaved(ur5):
+    teleop = Teleop(ur5, dt=DT)
+    teleop.start_recording()
+    drive(teleop, [1, 0, 0], [0, 0, 0], 5)
+    with pytest.raises(InputError, match="already recording"):
+        teleop.start_recording()
+    assert len(teleop.stop_recording()) == 5
+
+
 @pytest.mark.parametrize(
     ("call", "match"),
     [
@@ -255,3 +356,277 @@ def test_bad_construction_is_an_input_error(ur5):
         Teleop(ur5, algorithm="magic")
     with pytest.raises(InputError, match="robot"):
         Teleop("ur5")
+
+
+# ---------------------------------------------------------------------- the operator, at random
+FUZZ_OPERATIONS = 500
+"""Random public calls per sequence (``fuzz_count`` sequences per robot)."""
+
+LIMIT_SLACK_ULPS = 4.0
+"""A joint stopped on its limit lands there up to rounding: q + ((limit - q) / dt) * dt is
+within a few ulps of the limit (two roundings, each half an ulp of a number at most as big)."""
+
+PLAYBACK_DONE = 1e-12
+"""A playback ends when its last step achieved at least 1 - this share of the step to the
+oldest configuration (recorder.Playback.step): what the reversal may leave of that step."""
+
+
+def return_tolerance(q: np.ndarray, last_step: np.ndarray) -> float:
+    """How far a reversal that ran to completion may end from its segment's start: the share
+    of the last step the playback may leave undone, plus the rounding of pinocchio's
+    difference and integrate in that step (a few ulps of the largest coordinate) and of the
+    interpolated target (an ulp of the motion clock over a sample's span, far below that)."""
+    return PLAYBACK_DONE * float(np.abs(last_step).max()) + 64 * EPS * max(1.0, float(np.abs(q).max()))
+
+
+class Operator:
+    """Random public calls on a Teleop with a model of what the documentation promises,
+    checked after every call; ``log`` keeps the calls for the failure message."""
+
+    def __init__(self, robot: pinrate.Robot, seed: int, tmp_path) -> None:
+        self.robot = robot
+        self.rng = np.random.default_rng(seed)
+        self.tmp_path = tmp_path
+        self.teleop = Teleop(robot, dt=DT, timeout=0.25)
+        self.lower, self.upper = robot.position_limits()
+        self.slack = LIMIT_SLACK_ULPS * EPS * np.maximum(1.0, np.maximum(np.abs(self.lower), np.abs(self.upper)))
+        self.now = 0.0
+        self.held = (False, -math.inf)  # (a non-zero deflection, its time)
+        self.reversed_at = -math.inf
+        self.halted = False
+        self.segment_start = self.teleop.q.copy()
+        self.pending_mark = False  # a mark made during a reversal, due when it ends
+        self.recording: dict | None = None
+        self.saved = 0
+        self.log: list[str] = []
+
+    # ------------------------------------------------------------------ the calls
+    def run(self, operations: int) -> None:
+        names, weights = zip(
+            *[
+                ("command", 24),
+                ("tick", 40),
+                ("reverse", 5),
+                ("stop", 2),
+                ("halt", 1),
+                ("resume", 2),
+                ("mark", 3),
+                ("reset", 0.5),
+                ("configure", 1),
+                ("frame", 1),
+                ("start_recording", 2),
+                ("stop_recording", 2),
+                ("invalid", 3),
+            ],
+            strict=True,
+        )
+        p = np.array(weights) / sum(weights)
+        for _ in range(operations):
+            getattr(self, "do_" + names[self.rng.choice(len(names), p=p)])()
+            self.check_state()
+
+    def do_command(self) -> None:
+        if self.rng.random() < 0.3:
+            linear, angular = np.zeros(3), np.zeros(3)
+        else:
+            linear, angular = self.rng.uniform(-1, 1, 3), self.rng.uniform(-1, 1, 3)
+        self.log.append(f"command({linear.tolist()}, {angular.tolist()}, now={self.now!r})")
+        self.teleop.command(linear, angular, now=self.now)
+        self.held = (bool(linear.any() or angular.any()), self.now)
+
+    def do_tick(self) -> None:
+        draw = self.rng.random()
+        if draw < 0.8:
+            self.now += DT
+        elif draw < 0.9:
+            self.now += self.teleop.timeout * self.rng.uniform(1.0, 4.0)  # past the dead man
+        self.log.append(f"tick({self.now!r})")
+        teleop = self.teleop
+        was_reversing, before = teleop.reversing, teleop.q.copy()
+        nonzero, stamp = self.held
+        fresh = not self.halted and self.now - stamp <= teleop.timeout
+        interrupted = was_reversing and nonzero and fresh and stamp > self.reversed_at
+        step = teleop.tick(self.now)
+        np.testing.assert_array_equal(teleop.q, step.q)
+        if self.halted and not was_reversing:  # zero rates: q itself, up to renormalising a continuous joint
+            moved = float(np.abs(pin.difference(self.robot.model, before, teleop.q)).max())
+            assert moved <= 4 * EPS, f"a halted Teleop moved by {moved:.3g}"
+        if self.recording is not None:
+            self.recording["times"].append(self.now)
+            self.recording["last_q"] = step.q.copy()
+        if was_reversing and not teleop.reversing:
+            if not interrupted:  # ran to completion: back at the start of the segment
+                error = float(np.abs(teleop.q - self.segment_start).max())
+                assert error <= return_tolerance(teleop.q, step.joint_rates * DT), (
+                    f"the reversal ended {error:.3g} from the segment's start"
+                )
+                assert not teleop.reverse(self.now), "a completed reversal left motion to retrace"
+                self.segment_start = teleop.q.copy()  # the record is this configuration alone
+            elif self.pending_mark:  # the new segment starts where the command ended the reversal
+                self.segment_start = before
+            self.pending_mark = False
+        if was_reversing and teleop.reversing:
+            assert not interrupted, "a fresh command did not end the reversal"
+
+    def do_reverse(self) -> None:
+        self.log.append(f"reverse({self.now!r})")
+        was_reversing = self.teleop.reversing
+        started = self.teleop.reverse(self.now)
+        assert self.teleop.reversing is (started or was_reversing)
+        if was_reversing:
+            assert started, "reverse() during a reversal keeps it running"
+        if started:
+            self.reversed_at = self.now
+            self.held = (False, -math.inf)
+
+    def _ended_by_call(self) -> None:
+        """A reversal ended by a call (stop, halt): the record ends where the robot is."""
+        if self.pending_mark:
+            self.segment_start = self.teleop.q.copy()
+            self.pending_mark = False
+
+    def do_stop(self) -> None:
+        self.log.append("stop()")
+        self.teleop.stop()
+        assert not self.teleop.reversing
+        self.held = (False, -math.inf)
+        self._ended_by_call()
+
+    def do_halt(self) -> None:
+        self.log.append("halt()")
+        self.teleop.halt()
+        assert not self.teleop.reversing and self.teleop.halted
+        self.held = (False, -math.inf)
+        self.halted = True
+        self._ended_by_call()
+
+    def do_resume(self) -> None:
+        self.log.append("resume()")
+        self.teleop.resume()
+        assert not self.teleop.halted
+        self.halted = False
+
+    def do_mark(self) -> None:
+        self.log.append("mark()")
+        reversing = self.teleop.reversing
+        self.teleop.mark()
+        assert self.teleop.reversing is reversing, "mark() does not change the motion"
+        self._mark(reversing)
+
+    def _mark(self, reversing: bool) -> None:
+        if reversing:
+            self.pending_mark = True
+        else:
+            self.segment_start = self.teleop.q.copy()
+
+    def do_reset(self) -> None:
+        q = self.robot.random_configuration(self.rng) if self.rng.random() < 0.5 else None
+        self.log.append(f"reset({None if q is None else q.tolist()})")
+        self.teleop.reset(q)
+        expected = self.robot.home() if q is None else q
+        np.testing.assert_array_equal(self.teleop.q, expected)
+        assert not self.teleop.reversing
+        assert not self.teleop.reverse(self.now), "reset() forgets the record"
+        self.held = (False, -math.inf)
+        self.segment_start = expected.copy()
+        self.pending_mark = False
+
+    def do_configure(self) -> None:
+        options = {
+            "singularity": str(self.rng.choice(STRATEGIES)),
+            "wrist": str(self.rng.choice(WRIST_STRATEGIES)),
+        }
+        self.log.append(f"configure(**{options})")
+        reversing, q = self.teleop.reversing, self.teleop.q.copy()
+        self.teleop.configure(**options)
+        np.testing.assert_array_equal(self.teleop.q, q)
+        assert self.teleop.reversing is reversing, "configure() does not change the motion"
+
+    def do_frame(self) -> None:
+        frame = str(self.rng.choice(["hand", "base"]))
+        self.log.append(f"frame = {frame!r}")
+        self.teleop.frame = frame
+
+    def do_start_recording(self) -> None:
+        max_samples = int(self.rng.integers(1, 40)) if self.rng.random() < 0.5 else 2_000_000
+        self.log.append(f"start_recording({max_samples})")
+        if self.recording is not None:
+            with pytest.raises(InputError, match="already recording"):
+                self.teleop.start_recording(max_samples)
+            return
+        reversing = self.teleop.reversing
+        self.teleop.start_recording(max_samples)
+        assert self.teleop.recording and self.teleop.reversing is reversing
+        self.recording = {"max_samples": max_samples, "times": [], "start": self.teleop.q.copy(), "last_q": None}
+        self._mark(reversing)
+
+    def do_stop_recording(self) -> None:
+        self.log.append("stop_recording()")
+        if self.recording is None:
+            with pytest.raises(InputError, match="not recording"):
+                self.teleop.stop_recording()
+            return
+        recording, expected = self.teleop.stop_recording(), self.recording
+        self.recording = None
+        kept = expected["times"][-expected["max_samples"] :]
+        assert len(recording) == len(kept)
+        assert recording.times.tobytes() == np.array(kept, dtype=float).tobytes()  # as given to tick
+        assert np.all(np.diff(recording.times) >= 0)
+        np.testing.assert_array_equal(recording.start, expected["start"])
+        assert recording.q.shape == (len(kept), self.robot.nq)
+        assert recording.joint_rates.shape == (len(kept), self.robot.nv)
+        if kept:
+            np.testing.assert_array_equal(recording.q[-1], expected["last_q"])
+        if self.saved < 3 or not kept:  # every empty one, and a few others
+            self.saved += 1
+            loaded = pinrate.teleop.Recording.load(recording.save(self.tmp_path / f"run-{self.saved}.npz"))
+            for column in ("times", "q", "joint_rates", "status", "detail"):
+                assert getattr(loaded, column).tobytes() == getattr(recording, column).tobytes(), column
+        frames = recording.frames(fps=float(self.rng.uniform(1, 60)))
+        assert frames.shape[1:] == (self.robot.nq,) and len(frames) >= 1 + min(1, len(kept))
+        np.testing.assert_array_equal(frames[0], expected["start"])
+
+    def do_invalid(self) -> None:
+        teleop = self.teleop
+        calls = [
+            ("command([1, 0], [0, 0, 0])", lambda: teleop.command([1, 0], [0, 0, 0], now=self.now)),
+            ("command([nan, 0, 0], [0, 0, 0])", lambda: teleop.command([math.nan, 0, 0], [0, 0, 0], now=self.now)),
+            ("tick(nan)", lambda: teleop.tick(math.nan)),
+            ("reverse('soon')", lambda: teleop.reverse("soon")),
+            ("reset(q of the wrong size)", lambda: teleop.reset(np.zeros(self.robot.nq + 1))),
+            ("configure(singularity='pray')", lambda: teleop.configure(singularity="pray")),
+            ("frame = 'world'", lambda: setattr(teleop, "frame", "world")),
+        ]
+        if not teleop.recording:
+            calls.append(("start_recording(0)", lambda: teleop.start_recording(0)))
+        text, call = calls[self.rng.integers(len(calls))]
+        self.log.append(text + "  # invalid")
+        q, reversing, recording, halted = teleop.q.copy(), teleop.reversing, teleop.recording, teleop.halted
+        with pytest.raises(InputError):
+            call()
+        np.testing.assert_array_equal(teleop.q, q)
+        assert (teleop.reversing, teleop.recording, teleop.halted) == (reversing, recording, halted)
+
+    # ------------------------------------------------------------------ after every call
+    def check_state(self) -> None:
+        q = self.teleop.q
+        assert np.isfinite(q).all(), "q is not finite"
+        outside = (q < self.lower - self.slack) | (q > self.upper + self.slack)
+        assert not outside.any(), f"q outside the position limits at {np.flatnonzero(outside)}: {q}"
+        assert self.teleop.halted is self.halted
+
+
+@pytest.mark.parametrize("name", ["ur5", "barker_arm"])
+def test_random_operator_calls_keep_every_promise(name, tmp_path):
+    """Random public calls in random order (seeded, bounded): no exception but the
+    documented InputErrors, q finite and within the limits, a stop ends a reversal, a
+    completed reversal is back at its segment's start, a recording holds every tick."""
+    robot = pinrate.load(name)
+    for seed in range(fuzz_count(20)):
+        operator = Operator(robot, seed, tmp_path)
+        try:
+            operator.run(FUZZ_OPERATIONS)
+        except (Exception, pytest.fail.Exception) as error:
+            calls = "\n    ".join(operator.log[-25:])
+            where = f"{name}, seed {seed}, after {len(operator.log)} calls"
+            raise AssertionError(f"{where}; the last:\n    {calls}\n{type(error).__name__}: {error}") from error

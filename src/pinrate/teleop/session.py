@@ -19,6 +19,17 @@ motion clock by dt, idle ticks do not, so :meth:`Teleop.reverse` retraces the la
 ``history`` seconds of motion, not of waiting. :meth:`Teleop.mark` starts a new segment (the
 reversal then stops there). A run recorded for saving (:meth:`Teleop.start_recording`) keeps
 every tick with its wall time, rates and status (:class:`~.recording.Recording`).
+
+Only the motion calls (:meth:`~Teleop.command`, :meth:`~Teleop.reverse`, :meth:`~Teleop.stop`,
+:meth:`~Teleop.halt`, :meth:`~Teleop.reset`) change the motion. A reversal runs until it is
+back at its segment's start, a fresh non-zero command arrives, or stop, halt or reset ends
+it; whatever ends it, the record then ends where the robot is, so a later reversal goes on
+from there. Bookkeeping calls made meanwhile do not stop it: :meth:`~Teleop.mark` (and
+:meth:`~Teleop.start_recording`, which marks) takes effect when it ends, so the new segment
+starts where the reversal ended; :meth:`~Teleop.configure` lets it go on through the new
+controller; :meth:`~Teleop.reverse` lets it go on. The public calls may come in any order:
+an invalid argument or call raises the :class:`~pinrate.errors.InputError` its method
+documents and changes nothing, and nothing else raises.
 """
 
 from __future__ import annotations
@@ -109,6 +120,7 @@ class Teleop:
         self._clock = 0.0
         self._playback: Playback | None = None
         self._reversed_at = -math.inf
+        self._mark_due = False  # a mark() made during the reversal, applied when it ends
         self._recording: Recording | None = None
 
     # ------------------------------------------------------------------ configuration
@@ -135,11 +147,14 @@ class Teleop:
 
     def configure(self, **controller_options: object) -> None:
         """A new controller with these options changed (``singularity="freeze"``, …); q, the
-        record and the command are kept. Bad options raise InputError and change nothing."""
+        record and the command are kept, and a reversal goes on through the new controller
+        (its limits apply from the next tick). Bad options raise InputError and change
+        nothing."""
         options = {**self._options, **controller_options}
-        self.controller = self._controller(options)
-        self._options = options
-        self._playback = None
+        controller = self._controller(options)
+        self.controller, self._options = controller, options
+        if self._playback is not None:
+            self._playback.controller = controller
 
     # ------------------------------------------------------------------ the operator
     def command(self, linear: object, angular: object, now: object = None) -> None:
@@ -152,7 +167,8 @@ class Teleop:
         self._command = (linear_deflection * self.max_linear_speed, angular_deflection * self.max_angular_speed, stamp)
 
     def stop(self) -> None:
-        """Zero the command and end a reversal (the robot stops at the next tick)."""
+        """Zero the command and end a reversal (the robot stops at the next tick); the record
+        then ends where the robot is, and a :meth:`mark` made during the reversal applies."""
         self._command = (np.zeros(3), np.zeros(3), -math.inf)
         self._end_playback()
 
@@ -167,16 +183,30 @@ class Teleop:
 
     def reset(self, q: object = None) -> None:
         """Back to ``q`` (default ``robot.home()``) at once: command, record and reversal
-        cleared, the controller's memory too (:meth:`Controller.reset`)."""
-        self.q = self.robot.home() if q is None else self.robot.check_q(q)
+        cleared, the controller's memory too (:meth:`Controller.reset`); a new segment starts
+        at ``q``. The halt and a recording in progress are kept. InputError for a bad ``q``
+        (nothing changes then)."""
+        start = self.robot.home() if q is None else self.robot.check_q(q)
         self.stop()
+        self.q = start
         self.recorder.clear()
+        self._mark_due = False
         self.controller.reset()
         self.last = None
 
     def mark(self) -> None:
-        """Start a new segment here: a later :meth:`reverse` stops at this configuration."""
-        self.recorder.clear()
+        """Start a new segment here: a later :meth:`reverse` stops at this configuration.
+
+        During a reversal the mark waits for the reversal's end, and the robot keeps
+        retracing (a mark is bookkeeping, not a motion command: it neither stops the robot
+        nor forgets the way back it is taking). The new segment then starts where the
+        reversal ended: at the old segment's start when it ran to completion, where the robot
+        was when a command or :meth:`stop` ended it.
+        """
+        if self._playback is not None:
+            self._mark_due = True
+        else:
+            self.recorder.clear()
 
     @property
     def reversing(self) -> bool:
@@ -188,8 +218,13 @@ class Teleop:
         of it, or back to the last :meth:`mark`) backwards at the recorded pace, through the
         controller's step (every limit applies), until its start or until a non-zero
         command dated after ``now`` arrives. The held command is dropped. False (and
-        nothing changes) when there is no motion to retrace."""
+        nothing changes) when there is no motion to retrace. During a reversal it goes on
+        (True), only commands dated after this ``now`` end it. InputError for a bad ``now``."""
         stamp = _check_time(now)
+        if self._playback is not None:
+            self._command = (np.zeros(3), np.zeros(3), -math.inf)
+            self._reversed_at = stamp
+            return True
         if len(self.recorder) < 2:
             return False
         self._command = (np.zeros(3), np.zeros(3), -math.inf)
@@ -198,16 +233,31 @@ class Teleop:
         return True
 
     def _end_playback(self) -> None:
-        """Forget what the playback retraced, so the record ends where the robot is."""
+        """Forget what the playback retraced, so the record ends where the robot is (the
+        record alone, once it has come all the way back); or, when a :meth:`mark` waited for
+        the end, forget the whole record: the new segment starts here.
+
+        The record is not changed while a playback runs (no operator step records, mark
+        waits, reset and configure end or keep the playback first), so its newest sample is
+        where the playback began and ``elapsed`` counts back from it.
+        """
         playback = self._playback
         if playback is None:
             return
         self._playback = None
-        newest = float(self.recorder.times[-1])
-        self.recorder.truncate(newest - playback.elapsed)
-        self._clock = newest - playback.elapsed
-        if len(self.recorder):
-            self.recorder.record(self._clock, self.q)
+        if self._mark_due:
+            self._mark_due = False
+            self.recorder.clear()
+            return
+        if not len(self.recorder):
+            return
+        times = self.recorder.times
+        oldest, newest = float(times[0]), float(times[-1])
+        completed = playback.done and not playback.stopped  # then newest - elapsed may round past oldest
+        reached = oldest if completed else max(oldest, newest - playback.elapsed)
+        self.recorder.truncate(reached)
+        self._clock = reached
+        self.recorder.record(reached, self.q)
 
     # ------------------------------------------------------------------ the loop
     def current_command(self, now: object = None) -> tuple[np.ndarray, np.ndarray]:
@@ -221,7 +271,10 @@ class Teleop:
     def tick(self, now: object = None) -> Step:
         """One controller step of dt from :attr:`q` with the current command (a reversal's
         step while one runs); :attr:`q` becomes the step's. ``now``: s, default
-        ``time.monotonic()``; it ages the command (dead man), it does not set the step's dt."""
+        ``time.monotonic()``; it ages the command (dead man), it does not set the step's dt,
+        and it is the tick's time in a recording. A fresh non-zero command dated after the
+        reversal's ``now`` ends a reversal before the step; so does reaching the segment's
+        start after it. InputError for a bad ``now`` (nothing changes then)."""
         stamp = _check_time(now)
         linear, angular = self.current_command(stamp)
         commanded = bool(linear.any() or angular.any())
@@ -262,14 +315,22 @@ class Teleop:
         return self._recording is not None
 
     def start_recording(self, max_samples: int = 2_000_000) -> None:
-        """Keep every tick from now on (at most ``max_samples``: the oldest go first); also
-        :meth:`mark` a new segment."""
-        self._recording = Recording(self.robot, self.controller.dt, max_samples=max_samples)
-        self._recording.add_start(self.q)
+        """Keep every tick from now on (at most ``max_samples``: the oldest go first), the
+        recording's start being :attr:`q` now; also :meth:`mark` a new segment. During a
+        reversal the robot keeps retracing and the recording keeps its ticks; the mark
+        applies when the reversal ends (see :meth:`mark`). InputError (and nothing changes)
+        when already recording, so that a run is never dropped unsaved, or for a bad
+        ``max_samples``."""
+        if self._recording is not None:
+            raise InputError("already recording: call stop_recording() first")
+        recording = Recording(self.robot, self.controller.dt, max_samples=max_samples)
+        recording.add_start(self.q)
         self.mark()
+        self._recording = recording
 
     def stop_recording(self) -> Recording:
-        """The ticks since :meth:`start_recording` (InputError when not recording)."""
+        """The ticks since :meth:`start_recording`, the last ``max_samples`` of them (zero
+        ticks is a valid recording); InputError when not recording."""
         if self._recording is None:
             raise InputError("not recording: call start_recording() first")
         recording, self._recording = self._recording, None
