@@ -6,6 +6,8 @@ from __future__ import annotations
 import io
 import socket
 import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
 from urllib.parse import urlparse
 
 import numpy as np
@@ -214,3 +216,128 @@ def test_the_view_frames_the_robot_and_its_targets(browser, name: str) -> None:
     assert left >= margin * width and right <= (1 - margin) * width, (box, changed.size)
     assert top >= margin * height and bottom <= (1 - margin) * height, (box, changed.size)
     assert max((right - left) / width, (bottom - top) / height) >= 0.3, box  # not a speck in the distance
+
+
+# Every three.js Mesh under the node: the groups whose material entry is not a Material
+# (three.js skips those), and the triangles the renderer draws for it alone (a copy in a
+# scene of its own, never culled: renderer.info counts what each draw call drew).
+DRAWN_TRIANGLES = f"""
+(path) => {{
+  const node = ({WALK})(path);
+  if (!node || !node.object) return null;
+  const renderer = window.viewer.renderer;
+  let triangles = 0, skipped = 0, meshes = 0;
+  node.object.traverse((o) => {{
+    if (!o.isMesh) return;
+    meshes += 1;
+    if (Array.isArray(o.material)) {{
+      for (const group of o.geometry.groups) {{
+        const entry = o.material[group.materialIndex];
+        if (!(entry && entry.isMaterial)) skipped += 1;
+      }}
+    }}
+    const scene = new MeshCat.THREE.Scene();
+    const copy = o.clone();
+    copy.frustumCulled = false;
+    scene.add(copy);
+    renderer.render(scene, window.viewer.camera);
+    triangles += renderer.info.render.triangles;
+  }});
+  window.viewer.set_dirty();
+  return {{triangles, skipped, meshes}};
+}}
+"""
+
+
+def collada_triangles(path: Path) -> int:
+    """The triangles of every geometry the Collada file instances (polygons fanned)."""
+    root = ET.parse(path).getroot()
+    for element in root.iter():
+        element.tag = element.tag.rsplit("}", 1)[-1]
+    ids = {element.get("id"): element for element in root.iter() if element.get("id")}
+    total = 0
+    for instance in root.iter("instance_geometry"):
+        for primitive in ids[instance.get("url")[1:]].find("mesh"):
+            if primitive.tag == "triangles":
+                total += int(primitive.get("count"))
+            elif primitive.tag == "polylist":
+                total += sum(int(count) - 2 for count in primitive.find("vcount").text.split())
+    return total
+
+
+@pytest.mark.parametrize("where", ["offline", "server"])
+def test_every_material_group_of_the_ur5_is_drawn(browser, tmp_path, where: str) -> None:
+    # The offline page of a UR5 (and the live one, from the Meshcat server): each link's
+    # mesh draws all the triangles of its Collada file, no group pointing at a material
+    # list (before the fix the shoulder drew 9302 of its 13492 triangles, the grey housing
+    # missing).
+    import pinrate.viewer
+
+    robot = pinrate.load("ur5")
+    viewer = pinrate.viewer.Viewer(robot, offline=where == "offline")
+    try:
+        viewer.show(robot.home())
+        page = open_page(browser, viewer.save_html(tmp_path / "ur5.html").as_uri() if viewer.scene else viewer.url)
+        wait_for_meshes(page, viewer)
+        drawn = {}
+        for geometry in robot.visual_model.geometryObjects:
+            name = viewer._visualizer.getViewerNodeName(geometry, pin.GeometryType.VISUAL)
+            drawn[geometry.name] = page.evaluate(DRAWN_TRIANGLES, ["meshcat", *name.split("/"), "<object>"])
+        page.close()
+    finally:
+        viewer.close()
+    expected = {
+        geometry.name: {"triangles": collada_triangles(Path(geometry.meshPath)), "skipped": 0, "meshes": 1}
+        for geometry in robot.visual_model.geometryObjects
+    }
+    assert drawn == expected
+
+
+BARE_URDF = """<?xml version="1.0"?>
+<robot name="bare">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.3"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <link name="l1"/>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.1"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <link name="l2"/>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0.4 0 0"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <link name="l3"/>
+  <joint name="tool_joint" type="fixed"><parent link="l3"/><child link="tool"/><origin xyz="0.3 0 0"/></joint>
+  <link name="tool"/>
+</robot>
+"""
+
+
+def test_a_meshless_robot_shows_its_skeleton(browser, tmp_path) -> None:
+    # No <visual> at all: the offline replay holds one skeleton node per body, meshes with
+    # vertices, at Pinocchio's joint placements at the last frame, and the robot is seen.
+    import pinrate.viewer
+
+    path = tmp_path / "bare.urdf"
+    path.write_text(BARE_URDF)
+    robot = pinrate.load(path, tip="tool")
+    assert robot.visual_model.ngeoms == 0
+    viewer = pinrate.viewer.Viewer(robot, offline=True)
+    configurations = [robot.random_configuration(seed) for seed in range(4)]
+    viewer.frame(configurations[-1])
+    for q in configurations:
+        viewer.show(q)
+    page = open_page(browser, viewer.save_html(tmp_path / "bare.html").as_uri())
+    page.evaluate(
+        "() => { window.viewer.animator.pause(); window.viewer.animator.seek(window.viewer.animator.duration); }"
+    )
+    data = robot.model.createData()
+    pin.forwardKinematics(robot.model, data, configurations[-1])
+    for joint, name in enumerate(robot.model.names):
+        node = f"{pinrate.viewer.ROOT}/skeleton/{name}"
+        parts = ["links"] if joint == 0 else ["links", "joint"]
+        for part in parts:
+            vertices = page.evaluate(MESH_VERTICES, ["meshcat", *node.split("/"), part, "<object>"])
+            assert vertices > 0, (node, part)
+        np.testing.assert_allclose(page_matrix(page, node), data.oMi[joint].homogeneous, atol=1e-5, err_msg=name)
+    changed = robot_pixels(page, viewer)
+    page.close()
+    assert sum(changed.histogram()[255:]) > 500  # the skeleton covers hundreds of pixels

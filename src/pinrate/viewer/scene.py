@@ -11,7 +11,10 @@ that runs on the robot's.
     viewer.save_html("run.html")      # a standalone page that replays the whole run offline
 
 Scene layout (paths under Meshcat's ``/meshcat`` root, Z up):
-``pinrate/visuals/<geometry>`` the robot's visual geometries (Pinocchio's MeshcatVisualizer),
+``pinrate/visuals/<geometry>`` the robot's visual geometries (Pinocchio's MeshcatVisualizer,
+Collada files rewritten by :func:`~.collada.one_material_per_mesh` so every part is drawn),
+``pinrate/skeleton/<joint>`` the kinematic tree of the links without a drawn visual
+(:mod:`~.skeleton`),
 ``markers/target``, ``markers/tcp``, ``markers/sensor`` triads, ``paths/<k>`` the TCP paths,
 coloured by the spectral radius of G along the way (green ρ < 1, red ρ >= 1).
 """
@@ -23,6 +26,7 @@ import io
 import math
 import os
 import time
+import warnings
 import webbrowser
 from collections.abc import Sequence
 from pathlib import Path
@@ -38,8 +42,10 @@ from ..checks import as_pose, check_output_file, check_positive, check_vector
 from ..control.trajectory import Trajectory
 from ..errors import InputError
 from ..kinematics.manipulator import Robot, check_robot
+from .collada import one_material_per_mesh
 from .offline import SceneCommands
 from .server import MeshcatServer, check_reachable
+from .skeleton import Skeleton
 
 ROOT = "pinrate"
 CONVERGING_COLOUR = 0x2CA02C  # ρ < 1
@@ -107,11 +113,66 @@ def path_colours(spectral_radius: np.ndarray) -> np.ndarray:
     return np.where(converging[None, :], green[:, None], red[:, None]).astype(np.float32)
 
 
+class _SendCount:
+    """A meshcat window that passes every command on to ``window``, counting them."""
+
+    def __init__(self, window: object) -> None:
+        self.window = window
+        self.count = 0
+
+    def send(self, command: object) -> None:
+        self.count += 1
+        self.window.send(command)  # type: ignore[attr-defined]
+
+
+class RobotVisualizer(MeshcatVisualizer):
+    """Pinocchio's MeshcatVisualizer, with two changes.
+
+    * Collada meshes are sent as :func:`~.collada.one_material_per_mesh` rewrites them:
+      meshcat 0.3.2's viewer skips the parts of a multi-material ``<mesh>`` (the module's
+      docstring says why).
+    * The names of the geometries it actually sent are kept in :attr:`drawn` (Pinocchio
+      only warns about the others), so the viewer can draw the skeleton where a link has none.
+    """
+
+    viewer: meshcat.Visualizer  # set by initViewer
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)
+        self.drawn: set[str] = set()
+
+    def loadMeshFromFile(self, geometry_object: pin.GeometryObject) -> object:
+        mesh = super().loadMeshFromFile(geometry_object)
+        text = getattr(mesh, "dae_raw", None)  # Pinocchio's DaeMeshGeometry: the file's text
+        if isinstance(text, str):
+            try:
+                mesh.dae_raw = one_material_per_mesh(text)
+            except InputError as error:
+                warnings.warn(
+                    f"{geometry_object.meshPath}: sent unchanged, its multi-material parts may not be drawn ({error})",
+                    stacklevel=2,
+                )
+        return mesh
+
+    def loadViewerGeometryObject(
+        self, geometry_object: pin.GeometryObject, geometry_type: pin.GeometryType, color: object = None
+    ) -> None:
+        viewer, counter = self.viewer, _SendCount(self.viewer.window)
+        self.viewer = meshcat.Visualizer(window=counter)  # the same /meshcat root, through the counter
+        try:
+            super().loadViewerGeometryObject(geometry_object, geometry_type, color)
+        finally:
+            self.viewer = viewer
+        if counter.count:
+            self.drawn.add(geometry_object.name)
+
+
 class Viewer:
     """A robot in Meshcat, with markers, paths and a recorder for a standalone HTML replay.
 
     Args:
-        robot: what to draw (its visual meshes, or nothing where they are missing).
+        robot: what to draw: its visual meshes, and its kinematic tree (:attr:`skeleton`)
+            for the links without one.
         host: address the server binds to (127.0.0.1: this machine only).
         zmq_url: connect to a running Meshcat server instead of starting one.
         open_browser: open the URL in the default browser.
@@ -144,10 +205,17 @@ class Viewer:
             else:
                 self.meshcat = meshcat.Visualizer(zmq_url=self.server.zmq_url if self.server else zmq_url)
                 self.url = self.server.web_url if self.server else self.meshcat.url()
-            self._visualizer = MeshcatVisualizer(robot.model, pin.GeometryModel(), robot.visual_model)
+            self._visualizer = RobotVisualizer(robot.model, pin.GeometryModel(), robot.visual_model)
             self._visualizer.initViewer(viewer=self.meshcat)
             self._visualizer.loadViewerModel(rootNodeName=ROOT)
         self._geometry_data = robot.visual_model.createData()
+        dressed = {
+            geometry.parentJoint
+            for geometry in robot.visual_model.geometryObjects
+            if geometry.name in self._visualizer.drawn
+        }
+        self.skeleton = Skeleton(robot.model, [j for j in range(robot.model.njoints) if j not in dressed], ROOT)
+        self.skeleton.draw(self.meshcat)
         self._frames: list[dict[str, np.ndarray]] = []  # recorded transforms, for save_html
         self._hand_axes = False
         self._paths = 0
@@ -193,7 +261,8 @@ class Viewer:
         self.meshcat["/Cameras/default/rotated/<object>"].set_property("position", [x, z, -y])
 
     def node_transforms(self, q: np.ndarray) -> dict[str, np.ndarray]:
-        """Meshcat path -> 4x4 transform of every visual geometry and the tip/sensor markers at q."""
+        """Meshcat path -> 4x4 transform (relative to ``/meshcat``: the world frame, metres) of
+        every visual geometry, every skeleton body and the tip/sensor markers at q."""
         model, data = self.robot.model, self.data
         q = self.robot.check_q(q)
         pin.forwardKinematics(model, data, q)
@@ -203,6 +272,7 @@ class Viewer:
             scale = np.diag(np.concatenate([np.asarray(geometry.meshScale).ravel(), [1.0]]))
             name = self._visualizer.getViewerNodeName(geometry, pin.GeometryType.VISUAL)
             transforms[name] = self._geometry_data.oMg[index].homogeneous @ scale
+        transforms.update(self.skeleton.transforms(data))
         transforms["markers/tcp"] = np.array(pin.updateFramePlacement(model, data, self.robot.tip_id).homogeneous)
         world_T_sensor = np.array(pin.updateFramePlacement(model, data, self.robot.sensor_id).homogeneous)
         transforms["markers/sensor"] = world_T_sensor
