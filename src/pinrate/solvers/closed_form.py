@@ -116,9 +116,8 @@ def schur(A: Matrix, B: Matrix, U: Matrix, W: Matrix, v: Vector, omega: Vector) 
     k = len(W)
     # W^-1 U column by column, then the complement A - B W^-1 U.
     W_inv_U_columns = [solve(W, [U[r][c] for r in range(k)], "W") for c in range(len(A))]
-    complement = [
-        [A[r][c] - sum(B[r][j] * W_inv_U_columns[c][j] for j in range(k)) for c in range(len(A))] for r in range(len(A))
-    ]
+    # _dot, not sum(): CPython 3.12+ sums floats with Neumaier compensation, the core left to right.
+    complement = [[A[r][c] - _dot(B[r], W_inv_U_columns[c]) for c in range(len(A))] for r in range(len(A))]
     arm = solve(complement, _minus_matvec(v, B, solve(W, omega, "W")), "A - B W^-1 U")
     return arm, solve(W, _minus_matvec(omega, U, arm), "W")
 

@@ -30,6 +30,16 @@ import numpy as np
 from ..errors import InputError
 
 
+def _sum_of_squares(rows: np.ndarray | list[list[float]]) -> float:
+    """Σ value², left to right on Python floats, as the compiled core sums (not ``sum()``:
+    CPython 3.12+ sums floats with Neumaier compensation, which rounds differently)."""
+    total = 0.0
+    for row in rows:
+        for value in row:
+            total += value * value
+    return total
+
+
 def inverse_condition_bound(M: np.ndarray | list[list[float]], M_inverse: np.ndarray | list[list[float]]) -> float:
     """1 / (||M||_F ||M^-1||_F), a lower bound of :func:`inverse_condition` for a square M.
 
@@ -40,8 +50,8 @@ def inverse_condition_bound(M: np.ndarray | list[list[float]], M_inverse: np.nda
         inverse = np.asarray(M_inverse)
         inverse_norm2 = float(np.vdot(inverse, inverse))
     else:
-        matrix_norm2 = sum(value * value for row in M for value in row)
-        inverse_norm2 = sum(value * value for row in M_inverse for value in row)
+        matrix_norm2 = _sum_of_squares(M)
+        inverse_norm2 = _sum_of_squares(M_inverse)
     product = matrix_norm2 * inverse_norm2
     if not product > 0.0 or not math.isfinite(product):
         return 0.0
