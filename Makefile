@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: demo test core lint typecheck bench urdf docs clean
+.PHONY: demo test core lint typecheck bench urdf docs screenshots clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -56,7 +56,7 @@ demo: $(VENV)/.core
 test: lint $(VENV)/.core
 	$(BIN)/python -m pytest -q
 
-LINTED := src tests examples benchmarks .ci
+LINTED := src tests examples benchmarks docs .ci
 lint: $(VENV)/.installed
 	$(BIN)/ruff check $(LINTED)
 	$(BIN)/ruff format --check $(LINTED)
@@ -77,3 +77,7 @@ urdf: $(VENV)/.installed
 
 docs: $(VENV)/.installed
 	$(BIN)/pinrate paper > docs/paper-results.md
+
+# The pictures in docs/, in Chromium with Mesa's llvmpipe (docs/screenshots.py): look at them.
+screenshots: $(VENV)/.core
+	$(BIN)/python docs/screenshots.py

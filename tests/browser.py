@@ -17,16 +17,25 @@ import pytest
 
 CHROMIUM = os.environ.get("PINRATE_CHROMIUM", "/usr/bin/chromium")
 REQUIRED = os.environ.get("PINRATE_REQUIRE_BROWSER") == "1"
+SOFTWARE_GL = {
+    # The tests' default: SwiftShader, in every Chromium build. It drops line segments that
+    # cross the camera plane (the grid shows as a strip above the robot), so not for pictures.
+    "swiftshader": ["--disable-gpu", "--enable-unsafe-swiftshader"],
+    # Mesa's llvmpipe through ANGLE's EGL backend: conformant, as a GPU draws (docs/ pictures).
+    "llvmpipe": ["--use-angle=gl-egl", "--ignore-gpu-blocklist"],
+}
+GL = os.environ.get("PINRATE_BROWSER_GL", "swiftshader")
+if GL not in SOFTWARE_GL:
+    raise RuntimeError(f"PINRATE_BROWSER_GL must be one of {sorted(SOFTWARE_GL)}, got {GL!r}")
 # Playwright adds --headless itself (headless=True) and the fresh --user-data-dir (persistent context).
 FLAGS = [
     "--no-sandbox",
-    "--disable-gpu",
     "--disable-quic",
     "--no-first-run",
     "--disable-background-networking",
     "--disable-component-update",
     "--disable-sync",
-    "--enable-unsafe-swiftshader",
+    *SOFTWARE_GL[GL],
 ]
 
 
