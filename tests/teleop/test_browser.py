@@ -9,6 +9,7 @@ screenshots into docs/.
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 import subprocess
@@ -23,6 +24,7 @@ import pytest
 import pinrate
 from browser import chromium, needs_browser
 from pinrate.teleop import Recording
+from pinrate.teleop import server as server_module
 from pinrate.teleop.server import TeleopServer
 from support import ROOT
 
@@ -63,7 +65,7 @@ def console(ur5, tmp_path):
     servers = []
 
     def start(q0=None, **options):
-        teleop = pinrate.Teleop(ur5, q0, dt=DT, timeout=TIMEOUT, **options)
+        teleop = pinrate.Teleop(ur5, q0, **{"dt": DT, "timeout": TIMEOUT, **options})
         server = TeleopServer(teleop, record_dir=tmp_path)
         servers.append(server)
         return server
@@ -280,6 +282,425 @@ def test_reverse_returns_to_the_recorded_start(browser, console, tmp_path):
     shoot(page, tmp_path, "teleop-reversing")
     wait_until(lambda: not server.teleop.reversing, timeout=10)
     np.testing.assert_allclose(server.snapshot()[0], start, atol=1e-9)
+    page.close()
+
+
+def test_space_and_escape_only_stop_and_resume_is_a_deliberate_click(browser, console):
+    server = console()
+    page = open_console(browser, server)
+    hold(page, "KeyW", 0.3)
+    moved = still(server)
+    for key in ("Space", "Space", "Escape", "Space"):  # a double press, a repeat: stopped still
+        page.keyboard.press(key)
+        wait_until(lambda: server.teleop.halted)
+        page.wait_for_timeout(300)
+        assert server.teleop.halted, f"{key} resumed the robot"
+    page.wait_for_function("() => window.pinrate.last.halted")
+    assert page.inner_text("#stop") == "STOPPED" and page.is_enabled("#resume")
+    hold(page, "KeyS", 0.4)
+    page.keyboard.press("KeyB")  # reverse while halted: refused, said
+    page.wait_for_function("() => window.pinrate.events.some((e) => e.text.includes('halted: resume first'))")
+    time.sleep(0.3)
+    assert not server.teleop.reversing
+    np.testing.assert_array_equal(server.snapshot()[0], moved)
+    page.click("#resume")
+    wait_until(lambda: not server.teleop.halted)
+    page.wait_for_function("() => !window.pinrate.last.halted")
+    assert not page.is_enabled("#resume")
+    hold(page, "KeyS", 0.3)
+    assert not np.array_equal(still(server), moved)
+    page.click("#stop")
+    wait_until(lambda: server.teleop.halted)
+    page.close()
+
+
+def test_robot_keys_reach_the_robot_whatever_control_was_used(browser, console):
+    server = console()
+    page = open_console(browser, server)
+    read = "() => [document.querySelector('#singularity').value, document.querySelector('#wrist').value, "
+    read += "document.querySelector('#speed').value, window.pinrate.speed]"
+    page.select_option("#singularity", "freeze")  # the strategy chosen (Playwright focuses it)
+    wait_until(lambda: server.teleop.controller.singularity == "freeze")
+    page.click("#speed", position={"x": 60, "y": 5})  # the speed set with the mouse
+    page.wait_for_function("() => window.pinrate.speed < 1")
+    before = page.evaluate(read)
+    start = still(server)
+    for control in ("#singularity", "#speed", "#wrist", None):
+        if control is not None:
+            page.focus(control)  # as a click or a Tab leaves it
+        for key in ("ArrowDown", "ArrowUp", "Home", "End", "PageDown", "KeyA", "KeyD", "KeyF", "KeyS"):
+            page.keyboard.press(key)
+        assert page.evaluate(read) == before, f"a key changed a control focused on {control}"
+    page.wait_for_timeout(300)
+    assert server.teleop.controller.singularity == "freeze" and server.teleop.controller.wrist == "split"
+    page.focus("#wrist")
+    q0 = still(server)
+    hand = server.sensor_pose(q0)[:3, :3]
+    hold(page, "KeyE", 0.4)  # a robot key with a control focused: the hand moves along its +z
+    travel = hand.T @ (server.tip_pose(still(server))[:3, 3] - server.tip_pose(q0)[:3, 3])
+    assert travel[2] > 0.005
+    page.focus("#singularity")
+    page.keyboard.press("Space")  # the stop key too
+    wait_until(lambda: server.teleop.halted)
+    assert page.evaluate(read) == before
+    assert not np.array_equal(q0, start)
+    page.close()
+
+
+FREEZE = """(ms) => setTimeout(() => {
+  window.__frozenAt = performance.timeOrigin + performance.now();
+  const end = performance.now() + ms;
+  while (performance.now() < end);
+}, 0)"""
+"""Block the page's main thread for ``ms`` from a task of its own (page.evaluate returns
+first); ``window.__frozenAt``: when it began (epoch ms, the clock of ``time.time()``)."""
+
+
+def test_a_dead_man_stop_is_shown_as_such(browser, console):
+    server = console()
+    operator = open_console(browser, server)
+    watcher = browser.new_page()
+    watcher.goto(server.url)
+    watcher.wait_for_function("() => window.pinrate && window.pinrate.frames > 0", timeout=60_000)
+    operator.keyboard.down("KeyW")
+    wait_until(lambda: server.snapshot()[1] is not None and server.snapshot()[1].joint_rates.any())
+    operator.evaluate(FREEZE, 4000)  # the operator's page freezes with W held
+    frozen = time.monotonic()
+    watcher.wait_for_function("() => window.pinrate.last.dead_man", timeout=10_000)
+    assert time.monotonic() - frozen < 3.0
+    assert not server.snapshot()[1].joint_rates.any()
+    assert watcher.inner_text("#status-word").startswith("dead man:")
+    assert "deadman" in watcher.get_attribute("#status", "class")
+    operator.keyboard.up("KeyW")  # handled once the page is back
+    operator.wait_for_function("() => window.pinrate.last && window.pinrate.last.dead_man", timeout=10_000)
+    assert operator.inner_text("#status-word").startswith("dead man:")  # the page itself sees why
+    watcher.close()
+    operator.close()
+
+
+SLOW_FRAMES = """
+// Software WebGL on a slow machine, on purpose: each animation frame blocks the main thread
+// for 600 ms (once per frame, whatever number of callbacks it runs).
+const original = window.requestAnimationFrame.bind(window);
+let slowed = null;
+window.requestAnimationFrame = (callback) => original((time) => {
+  if (time !== slowed) {
+    slowed = time;
+    const end = performance.now() + 600;
+    while (performance.now() < end);
+  }
+  callback(time);
+});
+"""
+
+DEAD_MAN = 0.25
+"""The console's default dead man (s): what an operator runs with."""
+
+
+def key_held(page, code: str) -> float:
+    """Seconds the page held ``code`` (from taking the key down to taking it up): what it
+    commanded, whatever its main thread's delays."""
+    log = page.evaluate("(code) => window.pinrate.keyLog.filter((entry) => entry.code === code)", code)
+    downs = [entry["at"] for entry in log if entry["down"]]
+    ups = [entry["at"] for entry in log if not entry["down"]]
+    return (ups[-1] - downs[-1]) / 1000.0
+
+
+def test_a_slow_page_keeps_the_robot_moving_as_commanded(browser, console):
+    """Main thread blocked 600 ms a frame, the default 0.25 s dead man: a held W moves the hand
+    at least 90 % of speed x held time, and a reversal comes all the way back."""
+    server = console(timeout=DEAD_MAN)
+    page = browser.new_page()
+    page.add_init_script(SLOW_FRAMES)
+    page.goto(server.url)
+    page.wait_for_function(
+        "() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0", timeout=60_000
+    )
+    start = still(server)
+    hand = server.sensor_pose(start)[:3, :3]
+    hold(page, "KeyW", 2.0)
+    moved = still(server)
+    held = key_held(page, "KeyW")
+    travel = hand.T @ (server.tip_pose(moved)[:3, 3] - server.tip_pose(start)[:3, 3])
+    fraction = travel[0] / (0.1 * held)
+    print(f"slow page: held {held:.3f} s, travel {travel[0] * 1e3:.1f} mm, {fraction:.1%} of speed x time")
+    assert 0.9 <= fraction <= 1.05
+    assert np.linalg.norm(travel[1:]) < 0.03 * travel[0]
+    assert server.teleop.dead_man == ""
+    page.click("#reverse")
+    wait_until(lambda: server.teleop.reversing)
+    wait_until(lambda: not server.teleop.reversing, timeout=15)
+    back = server.tip_pose(still(server))[:3, 3] - server.tip_pose(start)[:3, 3]
+    print(f"slow page: the reversal ended {np.linalg.norm(back) * 1e3:.3f} mm from the start")
+    assert np.linalg.norm(back) < 1e-6
+    page.close()
+
+
+def test_a_frozen_page_stops_the_robot_within_the_freeze_limit(browser, console):
+    server = console(timeout=DEAD_MAN)
+    page = open_console(browser, server)
+    page.keyboard.down("KeyW")
+    wait_until(lambda: server.snapshot()[1] is not None and server.snapshot()[1].joint_rates.any())
+    page.evaluate(FREEZE, 5000)  # frozen for good, as far as the robot can tell
+    asked = time.time()
+    q = server.snapshot()[0]
+    moving_until = asked
+    while time.time() - asked < 3.5:  # when did the robot last move?
+        time.sleep(0.005)
+        now = server.snapshot()[0]
+        if not np.array_equal(now, q):
+            moving_until, q = time.time(), now
+    assert server.teleop.dead_man.startswith("the page froze")
+    time.sleep(max(0.0, 5.3 - (time.time() - asked)))
+    frozen = page.evaluate("() => window.__frozenAt") / 1000.0  # the page is back
+    stopped = moving_until - frozen
+    print(f"frozen page: the robot stopped {stopped:.3f} s after the freeze (limit {server.freeze_limit:g} s)")
+    assert server.freeze_limit - 0.1 < stopped < server.freeze_limit + 0.15  # slow pages keep going; frozen ones stop
+    page.keyboard.up("KeyW")
+    page.close()
+
+
+def zyx(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rz(yaw) Ry(pitch) Rx(roll), written out."""
+    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    return rz @ ry @ rx
+
+
+def test_the_tip_pose_is_read_out_in_the_world_frame(browser, console):
+    server = console()
+    page = open_console(browser, server)
+    for key in ("KeyW", "KeyE", "KeyI", "KeyJ"):  # off home, every angle non-zero
+        hold(page, key, 0.4)
+    q = still(server)
+    page.wait_for_function(
+        "(q) => { const c = window.pinrate.last.configuration; return c.every((v, i) => v === q[i]); }", arg=q.tolist()
+    )
+    shown = page.evaluate(
+        """() => ({
+            frame: window.pinrate.last,
+            text: ["x", "y", "z", "roll", "pitch", "yaw"].map((id) => document.getElementById("tcp-" + id).textContent),
+            name: document.getElementById("tcp-name").textContent,
+        })"""
+    )
+    np.testing.assert_array_equal(shown["frame"]["configuration"], q)
+    world_T_tip = server.tip_pose(q)
+    text = np.array([float(value) for value in shown["text"]])
+    np.testing.assert_allclose(text[:3], world_T_tip[:3, 3], atol=1e-6)  # m
+    rotation = world_T_tip[:3, :3]
+    rpy = [
+        math.atan2(rotation[2, 1], rotation[2, 2]),
+        -math.asin(rotation[2, 0]),
+        math.atan2(rotation[1, 0], rotation[0, 0]),
+    ]
+    np.testing.assert_allclose(text[3:], rpy, atol=1e-6)  # rad
+    np.testing.assert_allclose(zyx(*shown["frame"]["tip"]["rpy"]), rotation, atol=1e-9)
+    np.testing.assert_allclose(shown["frame"]["tip"]["position"], world_T_tip[:3, 3], atol=1e-12)
+    assert shown["name"] == server.robot.tip and min(abs(angle) for angle in rpy) > 0.01
+    page.close()
+
+
+NAMES_SHOWN = """() => Array.from(document.querySelectorAll(".joint")).map((row) => {
+  const name = row.querySelector(".name");
+  const box = name.getBoundingClientRect();
+  return { id: row.id, parent: row.parentElement.id, cls: row.className, text: name.textContent,
+           title: name.title, cut: name.scrollWidth > name.clientWidth + 0.5, width: box.width,
+           lines: Math.round(box.height / parseFloat(getComputedStyle(name).lineHeight)) };
+})"""
+
+
+def test_joint_names_whole_and_joints_not_driven_listed_apart(browser, panda, tmp_path):
+    teleop = pinrate.Teleop(panda, dt=DT, timeout=TIMEOUT)
+    with TeleopServer(teleop, record_dir=tmp_path) as server:
+        page = open_console(browser, server)
+        page.wait_for_timeout(300)
+        rows = page.evaluate(NAMES_SHOWN)
+        partition = teleop.controller.partition
+        driven = set(partition.arm) | set(partition.wrist)
+        assert [row["text"] for row in rows] == [name for name in panda.joint_names if name in driven] + [
+            name for name in panda.joint_names if name not in driven
+        ]
+        for row in rows:
+            assert not row["cut"] and row["lines"] == 1, row  # every name whole, on one line
+            assert row["title"].startswith(row["text"])
+            if row["text"] in driven:
+                assert row["parent"] == "joints"
+            else:  # the fingers: listed apart, never "at a limit" (finger 2 sits on its lower one at home)
+                assert row["parent"] == "joints-undriven" and "undriven" in row["cls"]
+                assert "limit" not in row["cls"] and "near" not in row["cls"]
+        assert page.is_visible("#undriven")
+        page.close()
+
+
+def test_ur5_joint_names_fit_and_a_phone_gets_the_whole_width_for_the_view(browser, console):
+    server = console()
+    page = open_console(browser, server)
+    rows = page.evaluate(NAMES_SHOWN)
+    assert [row["text"] for row in rows] == list(server.robot.joint_names)
+    for row in rows:
+        assert not row["cut"] and row["lines"] == 1, row  # shoulder_pan_joint whole
+    assert not page.is_visible("#undriven")
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.wait_for_timeout(500)
+    view = page.evaluate(
+        """() => ({ stage: document.getElementById("stage").getBoundingClientRect().toJSON(),
+                   canvas: window.viewer.renderer.domElement.getBoundingClientRect().toJSON(),
+                   panel: document.getElementById("panel").getBoundingClientRect().toJSON(),
+                   scroll: document.documentElement.scrollWidth })"""
+    )
+    assert view["stage"]["left"] == 0 and view["stage"]["width"] == 390
+    assert view["canvas"]["width"] == 390 and view["canvas"]["height"] > 300
+    assert view["panel"]["top"] >= view["stage"]["bottom"] - 1 and view["panel"]["width"] == 390
+    assert view["scroll"] <= 390  # nothing sticks out sideways
+    for row in page.evaluate(NAMES_SHOWN):
+        assert not row["cut"], row
+    page.set_viewport_size({"width": 1200, "height": 760})
+    page.close()
+
+
+def test_a_held_jog_button_moves_that_joint_alone(browser, console):
+    server = console()
+    page = open_console(browser, server)
+    robot = server.robot
+    elbow = robot.joint_names.index("elbow_joint")
+    start = still(server)
+    box = page.locator(f"#joint-{elbow} button.jog.plus").bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    time.sleep(0.8)
+    page.mouse.up()
+    q = still(server)
+    log = page.evaluate("() => window.pinrate.jogLog")
+    held = (log[-1]["at"] - log[-2]["at"]) / 1000.0
+    assert [entry["down"] for entry in log[-2:]] == [True, False]
+    others = np.delete(np.arange(robot.nq), elbow)
+    np.testing.assert_array_equal(q[others], start[others])  # every other joint exactly still
+    rate = server_module.JOG_SHARE * robot.model.velocityLimit[elbow]
+    assert q[elbow] - start[elbow] == pytest.approx(rate * held, rel=0.05)
+    page.close()
+
+
+def test_the_uncoupled_mode_moves_the_arm_with_the_translation_keys_and_one_wrist_joint_per_pair(browser, console):
+    server = console()
+    page = open_console(browser, server)
+    page.click("#mode-uncoupled")
+    wait_until(lambda: server.mode == "uncoupled")
+    page.wait_for_function("() => window.pinrate.last.mode === 'uncoupled'")
+    assert "wrist_1_joint" in page.inner_text("#mode-help")
+    wrist = [server.robot.joint_names.index(name) for name in server.teleop.controller.partition.wrist]
+    start = still(server)
+    hold(page, "KeyW", 0.5)
+    moved = still(server)
+    np.testing.assert_array_equal(moved[wrist], start[wrist])  # the wrist joints exactly still
+    assert np.abs(moved - start).max() > 0.01  # the arm moved
+    hold(page, "KeyJ", 0.3)  # the second pair: the second wrist joint alone
+    turned = still(server)
+    assert np.flatnonzero(turned != moved).tolist() == [wrist[1]]
+    page.click("#mode-twist")
+    wait_until(lambda: server.mode == "twist")
+    page.close()
+
+
+FAKE_SPACEMOUSE = """
+// A SpaceMouse behind WebHID, as the page sees one: navigator.hid.requestDevice offers it,
+// window.__report(id, counts) makes it send an input report (int16 little-endian counts).
+(() => {
+  const device = new EventTarget();
+  Object.assign(device, { vendorId: 0x256f, productId: 0xc635, productName: "SpaceMouse Compact", opened: false });
+  device.open = async () => { device.opened = true; };
+  device.close = async () => { device.opened = false; };
+  const hid = new EventTarget();
+  hid.requestDevice = async (options) => { window.__hidFilters = options.filters; return [device]; };
+  hid.getDevices = async () => (device.opened ? [device] : []);
+  Object.defineProperty(Navigator.prototype, "hid", { get: () => hid, configurable: true });
+  window.__report = (id, counts) => {
+    const view = new DataView(new ArrayBuffer(2 * counts.length));
+    counts.forEach((count, i) => view.setInt16(2 * i, count, true));
+    const event = new Event("inputreport");
+    Object.assign(event, { reportId: id, data: view, device });
+    device.dispatchEvent(event);
+  };
+})();
+"""
+
+
+def held_counts(page, since: int) -> float:
+    """Seconds between the page's first and last SpaceMouse report from log entry ``since``."""
+    log = page.evaluate("(since) => window.pinrate.hidLog.slice(since)", since)
+    return (log[-1]["at"] - log[0]["at"]) / 1000.0
+
+
+def test_a_spacemouse_drives_the_hand_like_two_3_axis_controllers(browser, console):
+    server = console()
+    page = browser.new_page()
+    page.add_init_script(FAKE_SPACEMOUSE)
+    page.goto(server.url)
+    page.wait_for_function(
+        "() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0", timeout=60_000
+    )
+    page.click("#spacemouse-connect")
+    page.wait_for_function("() => document.getElementById('spacemouse').textContent.includes('SpaceMouse Compact')")
+    filters = page.evaluate("() => window.__hidFilters")
+    assert {f["vendorId"] for f in filters} == {0x256F, 0x046D}
+    assert all((f["usagePage"], f["usage"]) == (1, 8) for f in filters)
+    start = still(server)
+    page.evaluate("() => window.__report(1, [20, -25, 10])")  # a hand resting on the cap: the dead zone
+    page.evaluate("() => window.__report(2, [-15, 0, 20])")
+    time.sleep(0.6)
+    np.testing.assert_array_equal(server.snapshot()[0], start)
+    hand = server.sensor_pose(start)[:3, :3]
+    since = len(page.evaluate("() => window.pinrate.hidLog"))
+    page.evaluate("() => window.__report(1, [0, -350, 0])")  # pushed away from the operator, fully
+    time.sleep(1.0)
+    page.evaluate("() => window.__report(1, [0, 0, 0])")
+    pushed = still(server)
+    held = held_counts(page, since)
+    travel = hand.T @ (server.tip_pose(pushed)[:3, 3] - server.tip_pose(start)[:3, 3])
+    assert travel[0] == pytest.approx(0.1 * held, rel=0.05)  # +x at full speed
+    assert np.linalg.norm(travel[1:]) < 0.03 * travel[0]
+    # a newer model's single report: rotation about the device's up (z is down): counter-clockwise seen from above
+    rotation = server.sensor_pose(pushed)[:3, :3]
+    since = len(page.evaluate("() => window.pinrate.hidLog"))
+    page.evaluate("() => window.__report(1, [0, 0, 0, 0, 0, -350])")
+    time.sleep(0.6)
+    page.evaluate("() => window.__report(1, [0, 0, 0, 0, 0, 0])")
+    turned = still(server)
+    held = held_counts(page, since)
+    angle = pin.log3(rotation.T @ server.sensor_pose(turned)[:3, :3])  # in the hand's axes
+    assert angle[2] == pytest.approx(0.5 * held, rel=0.05)
+    assert np.linalg.norm(angle[:2]) < 0.03 * angle[2]
+    page.close()
+
+
+SPACEMOUSE_PAD = """
+// A SpaceMouse as Chrome may offer it to the Gamepad API: no standard mapping, six axes.
+window.__pad = { axes: [0, 0, 0, 0.9, 0.9, 0], buttons: [0, 0] };
+Navigator.prototype.getGamepads = function () {
+  const pad = {
+    id: "3Dconnexion SpaceMouse Pro (Vendor: 256f Product: c62b)", index: 0, connected: true, mapping: "",
+    timestamp: performance.now(), axes: window.__pad.axes.slice(),
+    buttons: window.__pad.buttons.map((v) => ({ value: v, pressed: v > 0.5, touched: v > 0 })),
+  };
+  return [pad, null, null, null];
+};
+"""
+
+
+def test_a_spacemouse_offered_as_a_gamepad_is_ignored_and_said_so(browser, console):
+    server = console()
+    page = browser.new_page()
+    page.add_init_script(SPACEMOUSE_PAD)
+    page.goto(server.url)
+    page.wait_for_function(
+        "() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0", timeout=60_000
+    )
+    start = still(server)
+    time.sleep(0.6)  # its "right stick" (the cap's translation read as a standard pad) held over the dead zone
+    np.testing.assert_array_equal(server.snapshot()[0], start)
+    text = page.inner_text("#pad")
+    assert "SpaceMouse Pro" in text and "ignored" in text
     page.close()
 
 

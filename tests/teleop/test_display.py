@@ -55,3 +55,13 @@ def test_gauges_and_values_follow_the_joints():
     units = {gauge.name: gauge.unit for gauge in joint_gauges(scara)}
     prismatic = [name for name in scara.joint_names if scara.model.joints[scara.joint_id(name)].shortname()[10] == "P"]
     assert prismatic and all(units[name] == "m" for name in prismatic)
+
+
+def test_gauges_say_which_joints_the_partition_drives_and_their_velocity_limits(panda):
+    partition = Controller(panda).partition
+    gauges = joint_gauges(panda, (*partition.arm, *partition.wrist))
+    assert [gauge.name for gauge in gauges if not gauge.driven] == ["panda_finger_joint1", "panda_finger_joint2"]
+    for gauge in gauges:
+        joint = panda.model.joints[panda.joint_id(gauge.name)]
+        assert gauge.velocity == panda.model.velocityLimit[joint.idx_v]
+    assert all(gauge.driven for gauge in joint_gauges(panda))  # no partition given: all driven

@@ -58,3 +58,42 @@ def test_a_resting_pad_reads_zero_and_malformed_entries_read_zero():
 def test_keyboard_and_pad_add_and_clip():
     np.testing.assert_array_equal(mapping.deflections(["KeyW"], [0, -1, 0, 0], []), [1, 0, 0, 0, 0, 0])
     np.testing.assert_allclose(mapping.deflections(["KeyS"], [0, -1, 0, 0], []), np.zeros(6), atol=1e-15)
+
+
+# A SpaceMouse's own axes (HID): x to the operator's right, y towards the operator, z down.
+# In the hand axes: forward is +x, left +y, up +z (like W, A, E).
+@pytest.mark.parametrize(
+    ("counts", "expected"),
+    [
+        ([0, -350, 0, 0, 0, 0], [1, 0, 0, 0, 0, 0]),  # pushed away from the operator
+        ([-350, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0]),  # to the left
+        ([0, 0, -350, 0, 0, 0], [0, 0, 1, 0, 0, 0]),  # lifted
+        ([0, 0, 0, 0, -350, 0], [0, 0, 0, 1, 0, 0]),  # about the device's -y: the hand's +x
+        ([0, 0, 0, -350, 0, 0], [0, 0, 0, 0, 1, 0]),
+        ([0, 0, 0, 0, 0, -350], [0, 0, 0, 0, 0, 1]),  # about up: counter-clockwise seen from above
+        ([0, -1000, 0, 0, 0, 0], [1, 0, 0, 0, 0, 0]),  # beyond full scale: clipped
+    ],
+)
+def test_a_spacemouse_at_full_scale_deflects_one_hand_axis(counts, expected):
+    np.testing.assert_allclose(mapping.spacemouse(counts), expected, atol=1e-15)
+
+
+def test_the_spacemouse_map_is_a_rotation_and_its_dead_zone_is_radial():
+    # the device's axes (right, back, down) and the hand's (forward, left, up) are both right-handed:
+    # the translation and rotation triples turn alike, and a right-handed turn stays right-handed
+    full = mapping.SPACEMOUSE_FULL_SCALE
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        a, b = rng.uniform(-0.5, 0.5, 3), rng.uniform(-0.5, 0.5, 3)
+        ta, tb = (mapping.spacemouse([*(v * full), 0, 0, 0], size=0.0)[:3] for v in (a, b))
+        tc = mapping.spacemouse([*(np.cross(a, b) * full), 0, 0, 0], size=0.0)[:3]
+        np.testing.assert_allclose(np.cross(ta, tb), tc, atol=1e-12)
+    size = mapping.SPACEMOUSE_DEAD_ZONE
+    inside = [0.6 * size * full, -0.6 * size * full, 0.3 * size * full]  # each axis under, the length too
+    np.testing.assert_array_equal(mapping.spacemouse([*inside, *inside]), np.zeros(6))
+    edge = mapping.spacemouse([0, -1.0001 * size * full, 0, 0, 0, 0])
+    assert 0 < edge[0] < 1e-3  # continuous at the zone's edge
+    half = mapping.spacemouse([0, -0.5 * full, 0, 0, 0, 0])[0]
+    assert half == pytest.approx((0.5 - size) / (1 - size))
+    np.testing.assert_array_equal(mapping.spacemouse(["x", None, math.nan, True]), np.zeros(6))
+    np.testing.assert_allclose(mapping.deflections(["KeyW"], counts=[0, -full, 0, 0, 0, 0]), [1, 0, 0, 0, 0, 0])

@@ -93,12 +93,98 @@ def test_a_silent_controlling_page_stops_a_reversal(server):
         while server.teleop.reversing and time.monotonic() - started < 5:
             await asyncio.sleep(0.01)
         stopped = time.monotonic() - started
+        frame = await _frame_where(client, lambda f: not f["reversing"] and f["dead_man"] is not None)
         client.close()
-        return stopped
+        return stopped, frame
 
-    stopped = asyncio.run(session())
+    stopped, frame = asyncio.run(session())
     assert server.teleop.timeout <= stopped < server.teleop.timeout + 0.3
+    assert frame["dead_man"] == "reversal stopped: the controlling page is silent for 0.3 s"
+    assert frame["status"].startswith("dead man: reversal stopped")
     assert server.teleop.recorder.times.size > 1  # stopped part-way: motion left to reverse
+
+
+async def _controlling(server):
+    """A socket from the page's own origin, read until its role (it controls)."""
+    client = await _connect(server, f"http://127.0.0.1:{server.port}")
+    while True:
+        message = await client.read_message()
+        if isinstance(message, str) and json.loads(message).get("type") == "role":
+            assert json.loads(message)["controlling"]
+            return client
+
+
+async def _frame_where(client, condition, timeout: float = 5.0) -> dict:
+    """The first frame read that meets ``condition``."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        message = await asyncio.wait_for(client.read_message(), timeout)
+        if isinstance(message, str):
+            data = json.loads(message)
+            if data.get("type") == "frame" and condition(data):
+                return data
+    raise AssertionError("no such frame")
+
+
+def test_a_dead_man_stop_is_said_in_the_frames_until_the_operator_drives_again(server):
+    """A page that goes silent with W held: the robot stops within the timeout and every
+    frame says why (``dead_man``), after the page speaks again too, until it drives."""
+
+    async def session():
+        client = await _controlling(server)
+        for seq in range(1, 11):
+            await asyncio.sleep(0.02)
+            await client.write_message(json.dumps({"type": "input", "seq": seq, "keys": ["KeyW"]}))
+        silent = time.monotonic()
+        frame = await _frame_where(client, lambda f: f["dead_man"] is not None)
+        said = time.monotonic() - silent
+        assert not server.teleop.last.joint_rates.any()
+        await client.write_message(json.dumps({"type": "input", "seq": 11, "keys": []}))  # back, idle
+        await asyncio.sleep(0.2)
+        server._changed.set()
+        later = await _frame_where(client, lambda f: True)
+        await client.write_message(json.dumps({"type": "input", "seq": 12, "keys": ["KeyA"]}))
+        moving = await _frame_where(client, lambda f: f["moving"])
+        client.close()
+        return frame, said, later, moving
+
+    frame, said, later, moving = asyncio.run(session())
+    assert frame["dead_man"] == "no input for 0.3 s"
+    assert frame["status"] == "dead man: no input for 0.3 s"
+    assert server.teleop.timeout <= said < server.teleop.timeout + 1.0, said  # + a frame's delivery on a busy machine
+    assert later["dead_man"] == "no input for 0.3 s"  # still said once the page is back
+    assert moving["dead_man"] is None and moving["status"] != frame["status"]
+
+
+def test_a_heartbeat_from_a_frozen_page_commands_nothing(server):
+    """The worker's heartbeat goes on, but the page's main thread has been silent for longer
+    than the freeze limit (``alive`` far behind ``sent``): the held W is zeroed, and said."""
+    limit = server.freeze_limit
+
+    async def beat(client, seq: int, keys: list[str], silence: float) -> None:
+        now = time.monotonic() * 1e3  # the page's clock: this process's, in ms
+        message = {"type": "input", "seq": seq, "keys": keys, "sent": now, "alive": now - silence * 1e3}
+        await client.write_message(json.dumps(message))
+
+    async def session():
+        client = await _controlling(server)
+        for seq in range(1, 11):  # slow: the main thread silent for most of a second, W held
+            await beat(client, seq, ["KeyW"], 0.9 * limit)
+            await asyncio.sleep(0.02)
+        moving = server.teleop.last is not None and server.teleop.last.joint_rates.any()
+        for seq in range(11, 21):  # frozen
+            await beat(client, seq, ["KeyW"], limit + 0.05)
+            await asyncio.sleep(0.02)
+        q = server.teleop.q.copy()
+        await asyncio.sleep(0.1)
+        frozen_still = np.array_equal(server.teleop.q, q)
+        frame = await _frame_where(client, lambda f: f["dead_man"] is not None)
+        client.close()
+        return moving, frozen_still, frame
+
+    moving, frozen_still, frame = asyncio.run(session())
+    assert moving and frozen_still
+    assert frame["dead_man"] == f"the page froze: its main thread silent for {limit:g} s"
 
 
 def start_cli(*arguments: str) -> tuple[subprocess.Popen[str], int]:

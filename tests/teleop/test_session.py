@@ -169,6 +169,120 @@ def test_halt_ignores_commands_until_resume(ur5):
     assert not np.array_equal(teleop.q, start)
 
 
+def test_reverse_while_halted_is_refused_and_the_robot_stays(ur5):
+    teleop = Teleop(ur5, dt=DT)
+    now = drive(teleop, [1, 0, 0], [0, 0, 0], 30)
+    teleop.halt()
+    held = teleop.q.copy()
+    with pytest.raises(InputError, match="halted: resume first"):
+        teleop.reverse(now)
+    assert not teleop.reversing and teleop.halted
+    for _ in range(30):
+        now += DT
+        teleop.tick(now)
+    np.testing.assert_array_equal(teleop.q, held)  # a halted robot does not move
+    teleop.resume()
+    assert teleop.reverse(now)  # resumed: the way back is still there
+    now, _ = retrace(teleop, now)
+    np.testing.assert_allclose(teleop.q, ur5.home(), atol=1e-9)
+
+
+def test_the_dead_man_says_why_it_stopped_until_the_operator_drives_again(ur5):
+    teleop = Teleop(ur5, dt=DT, timeout=0.25)
+    now = drive(teleop, [1, 0, 0], [0, 0, 0], 10)
+    assert teleop.dead_man == ""
+    while now < 10 * DT + 0.25 + 2 * DT:  # the page goes silent with the stick held
+        now += DT
+        step = teleop.tick(now)
+    assert not step.joint_rates.any()
+    assert teleop.dead_man == "no input for 0.25 s"
+    teleop.command([0, 0, 0], [0, 0, 0], now=now)  # the page speaks again, stick released
+    teleop.tick(now + DT)
+    assert teleop.dead_man == "no input for 0.25 s"  # latched: the page can still see why
+    teleop.command([0, 1, 0], [0, 0, 0], now=now + DT)
+    assert teleop.dead_man == ""
+    assert teleop.tick(now + 2 * DT).joint_rates.any()
+    # stopped by the console for a reason of its own; a still robot says nothing
+    assert teleop.dead_man_stop("the controlling page is gone")
+    assert teleop.dead_man == "the controlling page is gone"
+    assert not teleop.dead_man_stop("the page froze")  # nothing moved since: the first reason stays
+    assert teleop.dead_man == "the controlling page is gone"
+    teleop.resume()
+    assert teleop.dead_man == ""
+    assert not teleop.dead_man_stop("the controlling page is gone")
+    assert teleop.dead_man == ""
+
+
+def test_a_jog_moves_the_named_joint_alone_and_the_dead_man_stops_it(ur5):
+    teleop = Teleop(ur5, dt=DT, timeout=0.25)
+    start = teleop.q.copy()
+    elbow = ur5.model.joints[ur5.joint_id("elbow_joint")].idx_q
+    now = 0.0
+    for _ in range(50):  # the button held: the page's heartbeat refreshes the jog
+        teleop.jog({"elbow_joint": -0.3}, now=now)
+        now += DT
+        teleop.tick(now)
+    others = np.delete(np.arange(ur5.nq), elbow)
+    np.testing.assert_array_equal(teleop.q[others], start[others])  # exactly still
+    assert teleop.q[elbow] - start[elbow] == pytest.approx(-0.3 * 50 * DT, rel=1e-12)
+    held = teleop.q.copy()
+    for _ in range(40):  # silent: the jog expires
+        now += DT
+        teleop.tick(now)
+    assert teleop.q[elbow] - held[elbow] == pytest.approx(-0.3 * (0.25 - DT), abs=0.3 * DT * 1.01)
+    assert teleop.dead_man == "no input for 0.25 s"
+    assert teleop.reverse(now)  # a jog is motion: the way back retraces it
+    retrace(teleop, now)
+    np.testing.assert_allclose(teleop.q, start, atol=1e-9)
+    with pytest.raises(InputError, match="elbow_joint"):
+        teleop.jog({"elbow": 0.1})
+    with pytest.raises(InputError, match="finite"):
+        teleop.jog({"elbow_joint": math.nan})
+
+
+def wrist_centre(robot: pinrate.Robot, q: np.ndarray, first: str, second: str) -> np.ndarray:
+    """The midpoint of the common perpendicular of two joints' axes (world, m), from
+    Pinocchio's joint placements and each joint's own axis (RX/RY/RZ)."""
+    data = robot.model.createData()
+    pin.forwardKinematics(robot.model, data, q)
+    lines = []
+    for name in (first, second):
+        joint = robot.joint_id(name)
+        local = np.eye(3)["XYZ".index(robot.model.joints[joint].shortname()[-1])]
+        lines.append((np.array(data.oMi[joint].translation), data.oMi[joint].rotation @ local))
+    (p, a), (r, b) = lines
+    # p + s a and r + t b closest: solve [a -b] [s t] = r - p in the least-squares sense
+    s, t = np.linalg.lstsq(np.column_stack([a, -b]), r - p, rcond=None)[0]
+    return 0.5 * (p + s * a + r + t * b)
+
+
+def test_uncoupled_translation_moves_the_wrist_centre_and_keeps_the_wrist_still(ur5):
+    # the world's axes: the hand's turn with the forearm, since the wrist does not move
+    teleop = Teleop(ur5, dt=DT, max_linear_speed=0.08, frame="base")
+    wrist = [ur5.model.joints[ur5.joint_id(name)].idx_q for name in teleop.controller.partition.wrist]
+    start = teleop.q.copy()
+    centre = wrist_centre(ur5, start, "wrist_1_joint", "wrist_2_joint")
+    now = 0.0
+    for _ in range(50):
+        teleop.command([1, 0, 0], [0, 0, 0], now=now, mode="uncoupled")
+        now += DT
+        teleop.tick(now)
+    np.testing.assert_array_equal(teleop.q[wrist], start[wrist])  # the wrist joints exactly still
+    travel = wrist_centre(ur5, teleop.q, "wrist_1_joint", "wrist_2_joint") - centre
+    assert travel[0] == pytest.approx(0.08 * 50 * DT, rel=1e-3)  # the wrist centre along the world's x
+    assert np.linalg.norm(travel[1:]) < 5e-3 * travel[0]  # Euler steps on a curved path: O(dt)
+    moved = teleop.q.copy()
+    for _ in range(20):  # a rotation key pair: one wrist joint each
+        teleop.command([0, 0, 0], [0, 1, 0], now=now, mode="uncoupled")
+        now += DT
+        teleop.tick(now)
+    changed = np.flatnonzero(teleop.q != moved)
+    assert changed.tolist() == [wrist[1]]
+    assert teleop.q[wrist[1]] - moved[wrist[1]] == pytest.approx(0.5 * 20 * DT, rel=1e-12)
+    with pytest.raises(InputError, match="uncoupled"):
+        teleop.command([1, 0, 0], [0, 0, 0], mode="coupled")
+
+
 def test_a_joint_driven_into_its_limit_is_held_there_and_named(ur5):
     wrist_3 = ur5.joint_id("wrist_3_joint")
     index = ur5.model.joints[wrist_3].idx_q
@@ -404,7 +518,8 @@ class Operator:
     def run(self, operations: int) -> None:
         names, weights = zip(
             *[
-                ("command", 24),
+                ("command", 20),
+                ("jog", 4),
                 ("tick", 40),
                 ("reverse", 5),
                 ("stop", 2),
@@ -430,9 +545,18 @@ class Operator:
             linear, angular = np.zeros(3), np.zeros(3)
         else:
             linear, angular = self.rng.uniform(-1, 1, 3), self.rng.uniform(-1, 1, 3)
-        self.log.append(f"command({linear.tolist()}, {angular.tolist()}, now={self.now!r})")
-        self.teleop.command(linear, angular, now=self.now)
+        mode = "uncoupled" if self.rng.random() < 0.25 else "twist"
+        self.log.append(f"command({linear.tolist()}, {angular.tolist()}, now={self.now!r}, mode={mode!r})")
+        self.teleop.command(linear, angular, now=self.now, mode=mode)
         self.held = (bool(linear.any() or angular.any()), self.now)
+
+    def do_jog(self) -> None:
+        names = self.robot.joint_names
+        chosen = self.rng.choice(len(names), size=int(self.rng.integers(0, 3)), replace=False)
+        rates = {names[i]: float(self.rng.uniform(-1, 1)) for i in chosen}
+        self.log.append(f"jog({rates}, now={self.now!r})")
+        self.teleop.jog(rates, now=self.now)
+        self.held = (any(rates.values()), self.now)
 
     def do_tick(self) -> None:
         draw = self.rng.random()
@@ -471,6 +595,11 @@ class Operator:
     def do_reverse(self) -> None:
         self.log.append(f"reverse({self.now!r})")
         was_reversing = self.teleop.reversing
+        if self.halted:  # refused: a halted robot does not move
+            with pytest.raises(InputError, match="halted: resume first"):
+                self.teleop.reverse(self.now)
+            assert not self.teleop.reversing
+            return
         started = self.teleop.reverse(self.now)
         assert self.teleop.reversing is (started or was_reversing)
         if was_reversing:
@@ -526,7 +655,8 @@ class Operator:
         expected = self.robot.home() if q is None else q
         np.testing.assert_array_equal(self.teleop.q, expected)
         assert not self.teleop.reversing
-        assert not self.teleop.reverse(self.now), "reset() forgets the record"
+        if not self.halted:
+            assert not self.teleop.reverse(self.now), "reset() forgets the record"
         self.held = (False, -math.inf)
         self.segment_start = expected.copy()
         self.pending_mark = False
@@ -592,6 +722,8 @@ class Operator:
             ("command([1, 0], [0, 0, 0])", lambda: teleop.command([1, 0], [0, 0, 0], now=self.now)),
             ("command([nan, 0, 0], [0, 0, 0])", lambda: teleop.command([math.nan, 0, 0], [0, 0, 0], now=self.now)),
             ("tick(nan)", lambda: teleop.tick(math.nan)),
+            ("jog({'nothing': 1})", lambda: teleop.jog({"nothing": 1.0}, now=self.now)),
+            ("command(mode='both')", lambda: teleop.command([0, 0, 0], [0, 0, 0], now=self.now, mode="both")),
             ("reverse('soon')", lambda: teleop.reverse("soon")),
             ("reset(q of the wrong size)", lambda: teleop.reset(np.zeros(self.robot.nq + 1))),
             ("configure(singularity='pray')", lambda: teleop.configure(singularity="pray")),

@@ -6,6 +6,7 @@ server turns them into JSON."""
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,7 +15,7 @@ from ..control.controller import Step
 from ..control.status import Status
 from ..kinematics.manipulator import Robot
 
-GREY, GREEN, BLUE, AMBER, ORANGE, PURPLE, RED = (
+GREY, GREEN, BLUE, AMBER, ORANGE, PURPLE, RED, BLACK = (
     "#7f7f7f",
     "#2ca02c",
     "#1f77b4",
@@ -22,6 +23,7 @@ GREY, GREEN, BLUE, AMBER, ORANGE, PURPLE, RED = (
     "#ff7f0e",
     "#9467bd",
     "#d62728",
+    "#111111",
 )
 
 WORDS: dict[Status, tuple[str, str]] = {
@@ -51,13 +53,17 @@ class Said:
     conditions: tuple[str, ...]
 
 
-def describe(step: Step | None, *, halted: bool = False, reversing: bool = False) -> Said:
+def describe(step: Step | None, *, halted: bool = False, reversing: bool = False, dead_man: str = "") -> Said:
     """The words and colour for ``step``: "idle" when nothing moved and nothing limited it,
-    "halted" while the operator's halt holds, "reversing: …" during a reversal; the detail
-    names the joint, the block and the numbers (the step's own ``detail``), and the frozen
-    joints."""
+    "halted" while the operator's halt holds, "dead man: …" (black) when the dead man stopped
+    the robot (``dead_man``: :attr:`.session.Teleop.dead_man`) and it has not moved since,
+    "reversing: …" during a reversal; the detail names the joint, the block and the numbers
+    (the step's own ``detail``), and the frozen joints."""
     if halted:
-        return Said("halted", RED, "the operator halted the robot: resume to drive it", ())
+        return Said("halted", RED, "the operator halted the robot: click resume to drive it", ())
+    if dead_man and not reversing and (step is None or not step.joint_rates.any()):
+        detail = "the robot stopped because the operator's input stopped; drive again to go on"
+        return Said(f"dead man: {dead_man}", BLACK, detail, ())
     if step is None:
         return Said("idle", GREY, "", ())
     word, colour = WORDS[step.status]
@@ -73,16 +79,23 @@ def describe(step: Step | None, *, halted: bool = False, reversing: bool = False
 
 @dataclass(frozen=True)
 class JointGauge:
-    """One joint on the console: its value against its limits (None: unlimited)."""
+    """One joint on the console: its value against its limits (None: unlimited), whether the
+    controller drives it (a joint of the partition's arm or wrist; the others, a gripper's
+    fingers, hold still unless jogged), and its velocity limit (rad/s or m/s; None when the
+    model gives none or a joint of several freedoms)."""
 
     name: str
     unit: str
     lower: float | None
     upper: float | None
+    driven: bool = True
+    velocity: float | None = None
 
 
-def joint_gauges(robot: Robot) -> list[JointGauge]:
-    """Every moving joint, in velocity order: unit ("rad" or "m") and position limits."""
+def joint_gauges(robot: Robot, driven: Iterable[str] | None = None) -> list[JointGauge]:
+    """Every moving joint, in velocity order: unit ("rad" or "m"), position limits, driven
+    (its name is in ``driven``: the partition's joints; None: every joint) and velocity limit."""
+    chosen = None if driven is None else set(driven)
     gauges = []
     model = robot.model
     for name in robot.joint_names:
@@ -91,7 +104,17 @@ def joint_gauges(robot: Robot) -> list[JointGauge]:
         prismatic = kind.startswith("JointModelP") and not kind.startswith("JointModelPlanar")
         limits = robot.joint_limits(name) if joint.nq == 1 else None
         lower, upper = limits if limits is not None else (None, None)
-        gauges.append(JointGauge(name, "m" if prismatic else "rad", lower, upper))
+        velocity = float(model.velocityLimit[joint.idx_v]) if joint.nv == 1 else math.nan
+        gauges.append(
+            JointGauge(
+                name,
+                "m" if prismatic else "rad",
+                lower,
+                upper,
+                chosen is None or name in chosen,
+                velocity if math.isfinite(velocity) and velocity > 0 else None,
+            )
+        )
     return gauges
 
 

@@ -8,8 +8,12 @@
   and the recordings, and one WebSocket per page. The page builds the Meshcat viewer itself
   (no iframe: it would take the keyboard's focus) and receives the scene's commands, packed
   as meshcat's server sends them, when it connects; then one JSON frame per render tick.
-  The page sends its held keys, its gamepad and its speed slider every 50 ms (the heartbeat)
-  and at every change, each stamped with the page's clock. Who may connect is
+  The page's socket lives in a dedicated worker (``static/heartbeat.js``), which sends the
+  held keys, the gamepad and the speed slider every 50 ms (the heartbeat) and at every
+  change (and a SpaceMouse's counts, read through WebHID, and the joint jog buttons held),
+  each stamped with its clock (``sent``) and with when the page's main thread last
+  spoke (``alive``): a main thread that rendering blocks for a second keeps the robot moving,
+  one silent for :data:`FREEZE_LIMIT` stops it. Who may connect is
   :mod:`.access`'s rule (Host and Origin on every request and handshake, a token off
   loopback, no framing). The first page controls; the others watch until the control is
   free and they take it. What one client can cost is capped: :data:`MAX_PAGES` sockets,
@@ -21,7 +25,9 @@
   deadlines; a late wake-up runs the missed ticks (at most 0.1 s of them), so the motion
   follows the wall clock. Buttons reach it through a queue, so only this thread touches the
   Teleop and the robot's ``pin.Data``. A controlling page that is gone or silent for longer
-  than the Teleop's timeout stops the robot (the dead man; a reversal too). A command is
+  than the Teleop's timeout stops the robot (the dead man; a reversal too), one whose main
+  thread is silent for :data:`FREEZE_LIMIT` too, and every frame then says why
+  (``dead_man``, :attr:`.Teleop.dead_man`) until the operator drives again. A command is
   aged from when the page sent it, not from when it was read, so a backlog never keeps the
   robot moving. An exception in a tick halts the robot, is said once on the page and in the
   terminal, and the console goes on (resume is the operator's decision).
@@ -74,7 +80,7 @@ from .access import SECURITY_HEADERS, AccessPolicy
 from .display import describe, joint_gauges, joint_values
 from .mapping import KEYS, deflections
 from .recording import Recording
-from .session import FRAMES, Teleop
+from .session import FRAMES, MODES, Teleop
 
 STATIC = Path(__file__).parent / "static"
 RENDER_RATE = 60.0
@@ -106,6 +112,21 @@ MESSAGE_RATE = 100.0
 
 MESSAGE_BURST = 200.0
 FLOOD_LIMIT = 1000
+
+FREEZE_LIMIT = 1.5
+"""s: how long the page's main thread may be silent while its heartbeat goes on (the page's
+worker, static/heartbeat.js, stamps each message with ``alive``: when the main thread last
+spoke) before the held command is zeroed and a reversal stopped (a frozen page: the keys it
+holds may no longer be the operator's). A slow page, whose main thread rendering blocks for
+up to a second a frame, keeps driving; a frozen one stops the robot this long (or the
+Teleop's timeout when longer) after its main thread's last sign of life, which a page that is
+not blocked gives every 50 ms and every animation frame. The control loop checks it on its
+own clock, so a late heartbeat delays nothing; the Teleop's timeout still applies to the
+heartbeat itself: a page gone or silent stops the robot within it."""
+
+JOG_SHARE = 0.2
+"""A joint's jog button held, at 100 % speed, jogs it at this share of its velocity limit
+(of ``max_angular_speed`` or ``max_linear_speed`` when the model gives none)."""
 
 CLOCK_DRIFT = 1e-3
 """s/s: how fast the estimated offset between a page's clock and the server's may grow
@@ -370,6 +391,7 @@ class TeleopServer:
             "index.html": ("text/html; charset=utf-8", (STATIC / "index.html").read_bytes()),
             "teleop.js": ("text/javascript; charset=utf-8", (STATIC / "teleop.js").read_bytes()),
             "teleop.css": ("text/css; charset=utf-8", (STATIC / "teleop.css").read_bytes()),
+            "heartbeat.js": ("text/javascript; charset=utf-8", (STATIC / "heartbeat.js").read_bytes()),
             "main.min.js": ("text/javascript; charset=utf-8", MAIN_JS.read_bytes()),
         }
         """The console's own files (content type, bytes), read once: all it serves besides
@@ -381,7 +403,8 @@ class TeleopServer:
         self._clients: list[_Socket] = []
         self._controller: _Socket | None = None
         self._next_client = 1
-        self._last_heard = -math.inf
+        self._last_heard = -math.inf  # when the controlling page last sent (monotonic s)
+        self._main_heard = -math.inf  # when its main thread last spoke (monotonic s)
         self._input_seq = 0
         self._applied_seq = 0
         self._running = threading.Event()
@@ -389,13 +412,20 @@ class TeleopServer:
         self._state_version = 0
         self._pose_lock = threading.Lock()
         self._pose_data = self.robot.model.createData()  # for callers of tip_pose, not the loop's
+        self._render_data = self.robot.model.createData()  # the render thread's, for the tip readout
 
         self.viewer = Viewer(self.robot, offline=True)
         self.viewer.draw_hand_axes()
         self.viewer.frame(teleop.q)
         self.viewer.show(teleop.q, record=False)
         self._scene = self.viewer.scene.packed()  # type: ignore[union-attr]  # encoded once, shared by every page
-        self._gauges = joint_gauges(self.robot)
+        partition = teleop.controller.partition
+        self._gauges = joint_gauges(self.robot, (*partition.arm, *partition.wrist))
+        joggable = set(teleop.controller.joggable)
+        self._jog_gauges = {gauge.name: gauge for gauge in self._gauges if gauge.name in joggable}
+        self.mode = "twist"
+        """What the keys and sticks command: ``"twist"`` (the hand) or ``"uncoupled"``
+        (Barker's arm/wrist mode; see :meth:`.Teleop.command`); the page's mode switch."""
 
         try:
             sockets = tornado.netutil.bind_sockets(port, address=self.host, family=socket.AF_INET)
@@ -499,7 +529,8 @@ class TeleopServer:
     def act(self, action: str, **arguments: Any) -> None:
         """Queue a button's action for the control loop (what a page's button sends):
         ``halt``, ``resume``, ``reverse``, ``home``, ``record`` (on=True/False), ``frame``
-        (frame="hand"/"base"), ``configure`` (singularity=..., wrist=...)."""
+        (frame="hand"/"base"), ``mode`` (mode="twist"/"uncoupled"), ``configure``
+        (singularity=..., wrist=...)."""
         self._actions.put((action, arguments, None))
 
     # ------------------------------------------------------------------ web thread
@@ -511,7 +542,7 @@ class TeleopServer:
             [
                 (r"/", _Page, {"server": self}),
                 (r"/ws", _Socket, {"server": self}),
-                (r"/static/(teleop\.js|teleop\.css)", _File, {"server": self}),
+                (r"/static/(teleop\.js|teleop\.css|heartbeat\.js)", _File, {"server": self}),
                 (r"/meshcat/(main\.min\.js)", _File, {"server": self}),
                 (r"/recordings/([^/]+)", _Recording, {"server": self}),
             ],
@@ -566,6 +597,7 @@ class TeleopServer:
             "keys": sorted(KEYS),
             "rate": self.rate,
             "timeout": teleop.timeout,
+            "freeze_limit": self.freeze_limit,
             "max_linear_speed": teleop.max_linear_speed,
             "max_angular_speed": teleop.max_angular_speed,
             "algorithm": teleop.controller.algorithm,
@@ -575,6 +607,10 @@ class TeleopServer:
             "wrists": list(WRIST_STRATEGIES),
             "frames": list(FRAMES),
             "frame": teleop.frame,
+            "modes": list(MODES),
+            "wrist_joints": list(teleop.controller.partition.wrist),
+            "joggable": sorted(self._jog_gauges),
+            "jog_share": JOG_SHARE,
             "controls": [("vx", "vy", "vz", "wx", "wy", "wz")[row] for row in teleop.controller.index.rows],
         }
 
@@ -587,7 +623,7 @@ class TeleopServer:
         self._clients.append(client)
         if self._controller is None:
             self._controller = client
-            self._last_heard = time.monotonic()
+            self._last_heard = self._main_heard = time.monotonic()
         self._send(client, self._hello(client))
         loop = self._loop
         if loop is not None:
@@ -614,7 +650,7 @@ class TeleopServer:
             self._clients.remove(client)
         if client is self._controller:
             self._controller = None
-            self._actions.put(("stop", {}, None))  # the controlling page is gone: stop now
+            self._actions.put(("stop", {"dead_man": "the controlling page is gone"}, None))  # stop now
             for other in self._clients:
                 self._send(other, self._role(other))
 
@@ -628,7 +664,7 @@ class TeleopServer:
         if kind == "claim":
             if self._controller is None:
                 self._controller = client
-                self._last_heard = arrived
+                self._last_heard = self._main_heard = arrived
                 for other in self._clients:  # only a change of hands is news
                     self._send(other, self._role(other))
             return
@@ -636,10 +672,32 @@ class TeleopServer:
             return  # watchers watch
         sent = self._sent_at(client, data.get("sent"), arrived)
         self._last_heard = sent
+        self._main_heard = sent - self._main_silence(data)
         if kind == "input":
             self._input(data, sent)
         else:
             self._actions.put((kind, data, client))
+
+    @staticmethod
+    def _main_silence(data: dict[str, Any]) -> float:
+        """s the page's main thread had been silent when the message was sent: ``sent`` minus
+        ``alive`` (both ms on the clock of the page's worker), 0 for a message without them
+        (its sender vouches for itself)."""
+        sent, alive = data.get("sent"), data.get("alive")
+        for stamp in (sent, alive):
+            if isinstance(stamp, bool) or not isinstance(stamp, int | float) or not math.isfinite(stamp):
+                return 0.0
+        return max(0.0, (float(sent) - float(alive)) / 1000.0)  # type: ignore[arg-type]
+
+    @property
+    def _frozen(self) -> str:
+        return f"the page froze: its main thread silent for {self.freeze_limit:g} s"
+
+    @property
+    def freeze_limit(self) -> float:
+        """s of main-thread silence that stop the robot (:data:`FREEZE_LIMIT`, or the
+        Teleop's timeout when longer)."""
+        return max(FREEZE_LIMIT, self.teleop.timeout)
 
     @staticmethod
     def _sent_at(client: _Socket, stamp: object, arrived: float) -> float:
@@ -664,13 +722,38 @@ class TeleopServer:
             keys = [str(code) for code in _listed(data.get("keys"))][:32]
             axes = _listed(data.get("axes"))[:16]
             buttons = _listed(data.get("buttons"))[:32]
+            counts = _listed(data.get("hid"))[:6]  # a SpaceMouse's raw counts, read by the page (WebHID)
+            jog = self._jog_rates(data.get("jog"), speed)
             seq = data.get("seq", 0)
             seq = int(seq) if isinstance(seq, int | float) and math.isfinite(seq) else self._input_seq
         except (TypeError, ValueError, OverflowError):
             return
-        deflection = deflections(keys, axes, buttons) * speed
-        self.teleop.command(deflection[:3], deflection[3:], now=sent)
+        deflection = deflections(keys, axes, buttons, counts) * speed
+        if sent - self._main_heard > self.freeze_limit and (deflection.any() or jog or self.teleop.reversing):
+            self.teleop.dead_man_stop(self._frozen)
+        elif jog:  # a jog button held wins over the sticks and keys
+            self.teleop.jog(jog, now=sent)
+        else:
+            self.teleop.command(deflection[:3], deflection[3:], now=sent, mode=self.mode)
         self._input_seq = seq
+
+    def _jog_rates(self, signs: object, speed: float) -> dict[str, float]:
+        """{joint: rate} from a message's ``jog`` ({joint name: deflection in [-1, 1]}, the
+        page's held +/- buttons): deflection x speed x :data:`JOG_SHARE` x the joint's
+        velocity limit (rad/s or m/s). Names that are not the robot's joints are ignored."""
+        if not isinstance(signs, dict):
+            return {}
+        rates = {}
+        for name, sign in list(signs.items())[:16]:
+            gauge = self._jog_gauges.get(name)
+            if gauge is None or isinstance(sign, bool) or not isinstance(sign, int | float) or not math.isfinite(sign):
+                continue
+            fallback = self.teleop.max_linear_speed if gauge.unit == "m" else self.teleop.max_angular_speed
+            limit = gauge.velocity if gauge.velocity is not None else fallback
+            rate = min(max(float(sign), -1.0), 1.0) * speed * JOG_SHARE * limit
+            if rate:
+                rates[name] = rate
+        return rates
 
     # ------------------------------------------------------------------ control thread
     def _control(self) -> None:
@@ -707,9 +790,21 @@ class TeleopServer:
             ):
                 self._state_version += 1
                 self._changed.set()
-            if (self._controller is None or now - self._last_heard > teleop.timeout) and teleop.reversing:
-                teleop.stop()  # the page that asked for the reversal is gone or silent
-                self._event("reversal stopped: the controlling page is gone or silent", "warning")
+            silent = self._controller is None or now - self._last_heard > teleop.timeout
+            frozen = now - self._main_heard > self.freeze_limit
+            if frozen and not teleop.reversing and teleop.dead_man_stop(self._frozen):
+                self._changed.set()  # on this clock, not at the next heartbeat: a late one is no delay
+            if (silent or frozen) and teleop.reversing:
+                why = (
+                    "gone"
+                    if self._controller is None
+                    else f"silent for {teleop.timeout:g} s"
+                    if silent
+                    else f"frozen: its main thread silent for {self.freeze_limit:g} s"
+                )
+                teleop.dead_man_stop(f"reversal stopped: the controlling page is {why}")
+                self._event(f"reversal stopped: the controlling page is {why}", "warning")
+                self._changed.set()
             deadline += period
             delay = deadline - time.monotonic()
             if delay > 0:
@@ -753,7 +848,11 @@ class TeleopServer:
     def _act(self, action: str, data: dict[str, Any]) -> None:
         teleop = self.teleop
         if action == "stop":
-            teleop.stop()
+            reason = data.get("dead_man")
+            if reason:
+                teleop.dead_man_stop(str(reason))
+            else:
+                teleop.stop()
         elif action == "halt":
             teleop.halt()
         elif action == "resume":
@@ -779,6 +878,18 @@ class TeleopServer:
                 saving.start()
         elif action == "frame":
             teleop.frame = str(data.get("frame"))
+        elif action == "mode":
+            mode = str(data.get("mode"))
+            if mode not in MODES:
+                raise InputError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
+            if mode == "uncoupled" and not teleop.controller.index.m:
+                raise InputError(
+                    "the uncoupled mode moves the wrist centre: this partition controls no linear component"
+                )
+            self.mode = mode
+            self._event(
+                "keys and sticks: " + ("the hand" if mode == "twist" else "arm (wrist centre) and wrist joints")
+            )
         elif action == "configure":
             options = {key: data[key] for key in ("singularity", "wrist") if key in data}
             teleop.configure(**options)
@@ -874,12 +985,20 @@ class TeleopServer:
                 time.sleep(spare)
 
     def _frame(self, *, poses: bool) -> dict[str, Any]:
+        """One frame for the pages: the status (``status``, ``colour``, ``detail``,
+        ``conditions``; ``dead_man``: why the dead man stopped the robot, or None), the joints
+        (``q``: each joint's value in velocity order; ``configuration``: q itself), the tip's
+        pose in the world (``tip``: :meth:`_tip_readout`), the console's state (``halted``,
+        ``reversing``, ``recording``, ``frame``, ``mode``, the strategies, the loop's
+        rate), the last step's numbers and, when ``poses``, every link's pose."""
         teleop = self.teleop
         q, step = teleop.q.copy(), teleop.last
-        said = describe(step, halted=teleop.halted, reversing=teleop.reversing)
+        dead_man = teleop.dead_man
+        said = describe(step, halted=teleop.halted, reversing=teleop.reversing, dead_man=dead_man)
         frame: dict[str, Any] = {
             "type": "frame",
             "input_seq": self._applied_seq,
+            "dead_man": dead_man or None,
             "status": said.word,
             "colour": said.colour,
             "detail": said.detail,
@@ -887,10 +1006,13 @@ class TeleopServer:
             "frozen": list(step.frozen) if step is not None else [],
             "moving": bool(step is not None and step.joint_rates.any()),
             "q": joint_values(self.robot, q),
+            "configuration": q.tolist(),
+            "tip": self._tip_readout(q),
             "halted": teleop.halted,
             "reversing": teleop.reversing,
             "recording": teleop.recording,
             "frame": teleop.frame,
+            "mode": self.mode,
             "singularity": teleop.controller.singularity,
             "wrist": teleop.controller.wrist,
             "loop": self.stats.summary(),
@@ -907,6 +1029,19 @@ class TeleopServer:
                 path: transform.T.reshape(-1).tolist() for path, transform in self.viewer.node_transforms(q).items()
             }
         return frame
+
+    def _tip_readout(self, q: np.ndarray) -> dict[str, Any]:
+        """The tip's pose in the world (base) frame at q, for the page: ``position`` (m) and
+        ``rpy`` (rad: roll, pitch, yaw with world_R_tip = Rz(yaw) Ry(pitch) Rx(roll),
+        Pinocchio's ``matrixToRpy``), from the render thread's own ``pin.Data``."""
+        model, data = self.robot.model, self._render_data
+        pin.framesForwardKinematics(model, data, q)
+        world_T_tip = data.oMf[self.robot.tip_id]
+        return {
+            "name": self.robot.tip,
+            "position": [float(value) for value in world_T_tip.translation],
+            "rpy": [float(value) for value in pin.rpy.matrixToRpy(world_T_tip.rotation)],
+        }
 
     def _broadcast(self, text: str) -> None:
         for client in list(self._clients):

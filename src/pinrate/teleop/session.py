@@ -8,6 +8,11 @@ per tick, a dead man, and the way back (Barker 1983, "resolved-rate control by a
         step = teleop.tick()                      # one Controller.step of dt from teleop.q
     teleop.reverse()                              # retrace the motion back to where it began
 
+Three kinds of command are held (Barker's modes): the hand's twist (:meth:`Teleop.command`,
+the default), his uncoupled arm/wrist mode (``command(..., mode="uncoupled")``: the linear
+deflections move the wrist centre with the arm joints, each angular one jogs one wrist
+joint) and individual joints (:meth:`Teleop.jog`). The dead man ages each alike.
+
 Commands are stick deflections in [-1, 1], scaled by ``max_linear_speed`` (m/s) and
 ``max_angular_speed`` (rad/s), in the robot's sensor frame's axes (Barker's hand frame when
 the sensor is the tip, the default) or, with ``frame="base"``, in the world frame's axes,
@@ -36,19 +41,47 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from ..checks import check_positive, check_vector
+from ..control.commands import JointJog, Uncoupled
 from ..control.controller import Controller, Step
 from ..control.recorder import Playback, Recorder
-from ..errors import InputError
+from ..errors import InputError, choices_hint
 from ..kinematics.manipulator import Robot, check_robot
 from .recording import Recording
 
 FRAMES = ("hand", "base")
 """The values of ``Teleop(frame=...)``: the sensor frame's axes or the world's."""
+
+MODES = ("twist", "uncoupled")
+"""The values of ``Teleop.command(mode=...)``: the hand's twist, or Barker's uncoupled
+arm/wrist mode (:class:`~pinrate.control.commands.Uncoupled`)."""
+
+
+class _Held(NamedTuple):
+    """The command held (one tuple, assigned at once: a reader never sees half of it).
+    ``linear`` m/s and ``angular`` rad/s (``frame`` axes; in the uncoupled mode ``angular``
+    holds the wrist joints' rates, one per axis), ``stamp`` s, ``mode`` a :data:`MODES` value
+    or ``"jog"``, ``jog`` {joint: rate} for a jog."""
+
+    linear: np.ndarray
+    angular: np.ndarray
+    stamp: float
+    mode: str = "twist"
+    jog: Mapping[str, float] = MappingProxyType({})
+
+    @property
+    def moves(self) -> bool:
+        """Something non-zero is commanded."""
+        return bool(self.linear.any() or self.angular.any() or any(self.jog.values()))
+
+
+_STILL = _Held(np.zeros(3), np.zeros(3), -math.inf)
 
 
 def _check_time(now: object) -> float:
@@ -85,7 +118,12 @@ class Teleop:
     Attributes:
         q: the current configuration (nq,).
         last: the last tick's :class:`Step` (None before the first).
-        halted: True after :meth:`halt` until :meth:`resume`: ticks command nothing.
+        halted: True after :meth:`halt` until :meth:`resume`: ticks command nothing and
+            :meth:`reverse` is refused (a halted robot does not move).
+        dead_man: why the dead man last stopped the robot, in words ("no input for 0.25 s";
+            see :meth:`dead_man_stop`), or "" when it has not since the operator last drove,
+            stopped, halted, resumed, reversed or went home. Latched, so that a page that
+            went silent sees why the robot stopped once it speaks again.
     """
 
     def __init__(
@@ -116,7 +154,8 @@ class Teleop:
         """The motion kept for :meth:`reverse` (times on the motion clock, s)."""
         self.last: Step | None = None
         self.halted = False
-        self._command = (np.zeros(3), np.zeros(3), -math.inf)  # one tuple: a reader never sees half of it
+        self.dead_man = ""
+        self._command = _STILL
         self._clock = 0.0
         self._playback: Playback | None = None
         self._reversed_at = -math.inf
@@ -157,29 +196,84 @@ class Teleop:
             self._playback.controller = controller
 
     # ------------------------------------------------------------------ the operator
-    def command(self, linear: object, angular: object, now: object = None) -> None:
+    def command(self, linear: object, angular: object, now: object = None, *, mode: str = "twist") -> None:
         """Hold the stick deflections ``linear`` and ``angular`` (3 each, clipped to [-1, 1])
         from ``now`` (s, default ``time.monotonic()``) until the next call; axes as
-        :attr:`frame` says. A non-zero command ends a reversal."""
+        :attr:`frame` says. A non-zero command ends a reversal.
+
+        ``mode="twist"`` (Barker's coupled mode): the hand's twist, ``linear`` x
+        ``max_linear_speed`` (m/s) and ``angular`` x ``max_angular_speed`` (rad/s).
+        ``mode="uncoupled"`` (Barker's uncoupled mode,
+        :class:`~pinrate.control.commands.Uncoupled`): ``linear`` x ``max_linear_speed`` is
+        the wrist centre's velocity (m/s, the same axes), served by the arm joints alone; each
+        angular deflection jogs one wrist joint of the partition, in order (x: the first, y:
+        the second, z: the third), at deflection x ``max_angular_speed`` (rad/s; deflections
+        beyond the wrist's joints are ignored), the other wrist joints holding still.
+        InputError for another mode, or for the uncoupled mode on a partition without
+        linear components."""
         linear_deflection = _deflection(linear, "linear")
         angular_deflection = _deflection(angular, "angular")
         stamp = _check_time(now)
-        self._command = (linear_deflection * self.max_linear_speed, angular_deflection * self.max_angular_speed, stamp)
+        if mode not in MODES:
+            raise InputError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
+        if mode == "uncoupled" and not self.controller.index.m:
+            raise InputError("the uncoupled mode moves the wrist centre: this partition controls no linear component")
+        linear_speed, angular_speed = (
+            linear_deflection * self.max_linear_speed,
+            angular_deflection * self.max_angular_speed,
+        )
+        held = _Held(linear_speed, angular_speed, stamp, mode)
+        self._command = held
+        if held.moves:
+            self.dead_man = ""  # the operator drives again
+
+    def jog(self, rates: Mapping[str, float], now: object = None) -> None:
+        """Hold a joint jog (:class:`~pinrate.control.commands.JointJog`, Barker's individual
+        joint control) from ``now`` (s, default ``time.monotonic()``) until the next command:
+        ``rates`` maps joint names to rad/s (revolute) or m/s (prismatic), every joint not
+        named holds still. Any 1-DOF joint may be jogged, in or out of the partition; the
+        position and velocity limits apply as to every step, the dead man as to every
+        command. A non-zero jog ends a reversal. InputError (nothing changes) for a name that
+        is not a joint that can be jogged (the message lists them) or a rate that is not a
+        finite number."""
+        jog = JointJog(rates)
+        stamp = _check_time(now)
+        joggable = self.controller.joggable
+        for name in jog.rates:
+            if name not in joggable:
+                raise InputError(f"jog: {name!r} is not a joint that can be jogged." + choices_hint(name, joggable))
+        held = _Held(np.zeros(3), np.zeros(3), stamp, "jog", MappingProxyType(dict(jog.rates)))
+        self._command = held
+        if held.moves:
+            self.dead_man = ""
 
     def stop(self) -> None:
         """Zero the command and end a reversal (the robot stops at the next tick); the record
         then ends where the robot is, and a :meth:`mark` made during the reversal applies."""
-        self._command = (np.zeros(3), np.zeros(3), -math.inf)
+        self._command = _STILL
+        self.dead_man = ""
         self._end_playback()
 
+    def dead_man_stop(self, reason: str) -> bool:
+        """:meth:`stop` because the operator's input stopped (the console's page is gone,
+        silent or frozen), and say so: :attr:`dead_man` becomes ``reason`` when something was
+        stopped (a non-zero command held, fresh or expired, or a reversal). True then; False
+        otherwise (the robot was still: what :attr:`dead_man` said stays)."""
+        stopped = self._command.moves or self._playback is not None
+        said = self.dead_man
+        self.stop()
+        self.dead_man = str(reason) if stopped else said
+        return stopped
+
     def halt(self) -> None:
-        """:meth:`stop`, and ignore commands until :meth:`resume`."""
+        """:meth:`stop`, and ignore commands until :meth:`resume` (:meth:`reverse` too)."""
         self.stop()
         self.halted = True
 
     def resume(self) -> None:
         """Accept commands again after :meth:`halt`."""
         self.halted = False
+        self.dead_man = ""
 
     def reset(self, q: object = None) -> None:
         """Back to ``q`` (default ``robot.home()``) at once: command, record and reversal
@@ -219,17 +313,22 @@ class Teleop:
         controller's step (every limit applies), until its start or until a non-zero
         command dated after ``now`` arrives. The held command is dropped. False (and
         nothing changes) when there is no motion to retrace. During a reversal it goes on
-        (True), only commands dated after this ``now`` end it. InputError for a bad ``now``."""
+        (True), only commands dated after this ``now`` end it. InputError for a bad ``now``,
+        and while :attr:`halted` ("halted: resume first": a halted robot does not move; nothing
+        changes)."""
         stamp = _check_time(now)
+        if self.halted:
+            raise InputError("halted: resume first")
         if self._playback is not None:
-            self._command = (np.zeros(3), np.zeros(3), -math.inf)
+            self._command = _STILL
             self._reversed_at = stamp
             return True
         if len(self.recorder) < 2:
             return False
-        self._command = (np.zeros(3), np.zeros(3), -math.inf)
+        self._command = _STILL
         self._playback = self.recorder.playback(self.controller)
         self._reversed_at = stamp
+        self.dead_man = ""
         return True
 
     def _end_playback(self) -> None:
@@ -262,11 +361,20 @@ class Teleop:
     # ------------------------------------------------------------------ the loop
     def current_command(self, now: object = None) -> tuple[np.ndarray, np.ndarray]:
         """(linear, angular) in m/s and rad/s, :attr:`frame` axes, that a tick at ``now``
-        would command: zero when older than ``timeout`` or while halted."""
-        linear, angular, stamp = self._command
-        if self.halted or _check_time(now) - stamp > self.timeout:
+        would command: zero when older than ``timeout`` or while halted (and for a jog; in
+        the uncoupled mode, the wrist centre's velocity and the wrist joints' rates)."""
+        held = self._live(_check_time(now))
+        if held.mode == "jog":
             return np.zeros(3), np.zeros(3)
-        return linear, angular
+        return held.linear, held.angular
+
+    def _live(self, stamp: float) -> _Held:
+        """The command a tick at ``stamp`` serves: the held one, or none (still) when it is
+        older than ``timeout`` or while halted."""
+        held = self._command
+        if self.halted or stamp - held.stamp > self.timeout:
+            return _STILL
+        return held
 
     def tick(self, now: object = None) -> Step:
         """One controller step of dt from :attr:`q` with the current command (a reversal's
@@ -274,11 +382,15 @@ class Teleop:
         ``time.monotonic()``; it ages the command (dead man), it does not set the step's dt,
         and it is the tick's time in a recording. A fresh non-zero command dated after the
         reversal's ``now`` ends a reversal before the step; so does reaching the segment's
-        start after it. InputError for a bad ``now`` (nothing changes then)."""
+        start after it. A non-zero command older than ``timeout`` counts as zero and sets
+        :attr:`dead_man`. InputError for a bad ``now`` (nothing changes then)."""
         stamp = _check_time(now)
-        linear, angular = self.current_command(stamp)
-        commanded = bool(linear.any() or angular.any())
-        if self._playback is not None and commanded and self._command[2] > self._reversed_at:
+        held = self._live(stamp)
+        commanded = held.moves
+        expired = not (commanded or self.halted or self.dead_man) and self._playback is None
+        if expired and self._command.moves:
+            self.dead_man = f"no input for {self.timeout:g} s"  # a non-zero command expired: the dead man
+        if self._playback is not None and commanded and held.stamp > self._reversed_at:
             self._end_playback()
         if self._playback is not None:
             step = self._playback.step(self.q)
@@ -286,20 +398,33 @@ class Teleop:
             if self._playback.done:
                 self._end_playback()
         else:
-            step = self._operator_step(linear, angular)
+            step = self._operator_step(held)
         self.last = step
         if self._recording is not None:
             self._recording.add(stamp, step)
         return step
 
-    def _operator_step(self, linear: np.ndarray, angular: np.ndarray) -> Step:
+    def _operator_step(self, held: _Held) -> Step:
+        """One controller step of the held command (a twist, an uncoupled command, a jog)."""
         controller = self.controller
         observation = controller.observe_unchecked(self.q)
-        if self._frame == "base":
-            sensor_R_world = observation.world_T_sensor.rotation.T
-            linear, angular = sensor_R_world @ linear, sensor_R_world @ angular
-        twist = np.concatenate([linear, angular])[controller.index.rows]
-        step = controller.step(self.q, twist, observation=observation)
+        linear, angular = held.linear, held.angular
+        command: object
+        if held.mode == "jog":
+            command = JointJog(held.jog)
+        elif held.mode == "uncoupled":
+            if self._frame == "base":
+                linear = observation.world_T_sensor.rotation.T @ linear
+            index = controller.index
+            wrist = controller.partition.wrist
+            rates = {name: float(angular[axis]) for axis, name in enumerate(wrist[:3]) if angular[axis]}
+            command = Uncoupled(linear[index.rows[: index.m]], rates)
+        else:
+            if self._frame == "base":
+                sensor_R_world = observation.world_T_sensor.rotation.T
+                linear, angular = sensor_R_world @ linear, sensor_R_world @ angular
+            command = np.concatenate([linear, angular])[controller.index.rows]
+        step = controller.step(self.q, command, observation=observation)
         if step.joint_rates.any():
             if not len(self.recorder):
                 self.recorder.record(self._clock, self.q)
@@ -337,4 +462,4 @@ class Teleop:
         return recording
 
 
-__all__ = ["FRAMES", "Teleop"]
+__all__ = ["FRAMES", "MODES", "Teleop"]
