@@ -15,6 +15,7 @@ import shutil
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -814,3 +815,25 @@ def test_benchmark_smoke():
     )
     assert result.returncode == 0, result.stderr[-2000:]
     assert "teleop console, page attached" in result.stdout and "key to painted frame" in result.stdout
+
+
+def test_a_shared_console_is_driven_from_its_tokened_url_only(browser, ur5, tmp_path):
+    """Off loopback the printed URL carries the token: the page opened from it controls and
+    drives; the same address without the token gets no page and no socket."""
+    teleop = pinrate.Teleop(ur5, dt=DT, timeout=TIMEOUT)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "whoever has its URL ... can drive the robot": tested in test_security
+        server = TeleopServer(teleop, host="0.0.0.0", record_dir=tmp_path)
+    try:
+        assert "?token=" in server.url and "0.0.0.0" not in server.url
+        untokened = browser.new_page()
+        response = untokened.goto(server.url.split("?")[0])
+        assert response is not None and response.status == 403
+        untokened.close()
+        page = open_console(browser, server)
+        page.keyboard.down("KeyW")
+        wait_until(lambda: server.snapshot()[1] is not None and server.snapshot()[1].joint_rates.any())
+        page.keyboard.up("KeyW")
+        page.close()
+    finally:
+        server.close()
