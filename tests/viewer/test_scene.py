@@ -178,16 +178,3 @@ def test_demo_records_html(tmp_path) -> None:
     assert result.returncode == 0, result.stderr[-2000:]
     assert "segment 1/2" in result.stdout and "segment 2/2" in result.stdout
     assert out.stat().st_size > 10_000
-
-
-def test_forget_frames_leaves_only_what_is_shown_after(scara_viewer) -> None:
-    robot = scara_viewer.robot
-    for seed in range(3):
-        scara_viewer.show(robot.random_configuration(seed))
-    scara_viewer.forget_frames()
-    assert scara_viewer.recorded_frames == 0
-    shown = [robot.random_configuration(10 + seed) for seed in range(2)]
-    for q in shown:
-        scara_viewer.show(q)
-    clips = scara_viewer.animation(fps=10).clips
-    assert clips and all(sorted(set(clip.tracks["position"].frames)) == [0, 1] for clip in clips.values())

@@ -372,11 +372,6 @@ class Viewer:
     def recorded_frames(self) -> int:
         return len(self._frames)
 
-    def forget_frames(self) -> None:
-        """Forget the frames :meth:`show` recorded: the next :meth:`save_html` replays only
-        what is shown after (one viewer, its meshes loaded once, for many replays)."""
-        self._frames.clear()
-
     def animation(self, fps: float = 30.0) -> meshcat.animation.Animation:
         """The recorded frames as a Meshcat animation (one keyframe per :meth:`show`)."""
         animation = meshcat.animation.Animation(default_framerate=fps)
