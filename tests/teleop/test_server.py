@@ -280,3 +280,84 @@ def test_a_file_as_record_folder_is_refused(tmp_path):
 def test_snapshot_and_poses_are_safe_beside_the_loop(server, ur5):
     q, _ = server.snapshot()
     np.testing.assert_allclose(server.tip_pose(q), ur5.pose(q), atol=1e-12)
+
+
+def recorded_run(server, seconds: float):
+    """Record ``seconds`` of +x motion through the console's actions; the Recording's files."""
+    server.act("record", on=True)
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        server.teleop.command([1, 0, 0], [0, 0, 0])
+        time.sleep(0.02)
+    server.act("record", on=False)
+
+
+def test_each_catch_up_tick_is_recorded_at_its_own_time(server):
+    """The loop runs the ticks a late wake-up missed: each is stamped at its own time, so a
+    recording's times advance tick by tick (they once shared the wake-up's stamp: 7-86 %)."""
+    captured = []
+    original = server.teleop.stop_recording
+
+    def keep():
+        recording = original()
+        captured.append(recording)
+        return recording
+
+    server.teleop.stop_recording = keep
+    real_tick, calls = server.teleop.tick, [0]
+
+    def sometimes_slow(now=None):  # every 20th tick costs 3 periods: the loop must catch up
+        calls[0] += 1
+        if calls[0] % 20 == 0:
+            time.sleep(0.006)
+        return real_tick(now)
+
+    server.teleop.tick = sometimes_slow
+    recorded_run(server, 0.5)
+    assert wait_until(lambda: len(server.saved) == 2)
+    times = captured[0].times
+    assert times.size > 100
+    assert np.all(np.diff(times) > 0)  # no two ticks share a stamp
+
+
+CLOSE_RIGHT_AFTER_RECORDING = """
+import sys, time, pinrate
+from pinrate.teleop.server import TeleopServer
+teleop = pinrate.Teleop(pinrate.load("ur5"), dt=0.002, timeout=0.3)
+server = TeleopServer(teleop, record_dir=sys.argv[1])
+server.act("record", on=True)
+for _ in range(15):
+    teleop.command([1, 0, 0], [0, 0, 0])
+    time.sleep(0.02)
+server.act("record", on=False)
+time.sleep(0.01)  # the loop takes the action and starts the save
+server.close()  # as Ctrl-C does; then the interpreter exits, killing daemon threads
+"""
+
+
+def test_close_right_after_stopping_a_recording_writes_it_whole(tmp_path):
+    subprocess.run([sys.executable, "-c", CLOSE_RIGHT_AFTER_RECORDING, str(tmp_path)], check=True, timeout=120)
+    assert sorted(path.suffix for path in tmp_path.iterdir()) == [".html", ".npz"]
+    assert next(tmp_path.glob("*.html")).read_text().rstrip().endswith("</html>")
+
+
+def test_a_recording_without_a_tick_is_said_and_not_saved(server, caplog):
+    messages = []
+    original = server._event
+    server._event = lambda text, *args, **kwargs: (messages.append(text), original(text, *args, **kwargs))
+    server.teleop.halt()  # the loop still ticks; stop the recording before any tick lands
+    server._actions.put(("record", {"on": True}, None))
+    server._actions.put(("record", {"on": False}, None))
+    assert wait_until(lambda: any("no tick was recorded" in text for text in messages))
+    time.sleep(0.3)
+    assert server.saved == []  # nothing to replay: no files, and no save thread died
+    assert not [record for record in caplog.records if record.levelname == "ERROR"]
+
+
+def wait_until(condition, timeout: float = 30.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.01)
+    return bool(condition())
