@@ -731,6 +731,13 @@ def test_one_page_controls_the_others_watch(browser, console, tmp_path):
     np.testing.assert_array_equal(server.snapshot()[0], start)
     second.wait_for_timeout(300)
     shoot(second, tmp_path, "teleop-watching")
+    second.keyboard.press("Space")  # the e-stop is everyone's: a watcher may halt the robot
+    wait_until(lambda: server.teleop.halted)
+    second.click("#resume")  # resuming is not: the watcher's click does nothing
+    time.sleep(0.3)
+    assert server.teleop.halted
+    first.click("#resume")
+    wait_until(lambda: not server.teleop.halted)
     first.close()
     second.wait_for_selector("#claim:not([hidden])")
     second.click("#claim")

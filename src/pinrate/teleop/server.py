@@ -669,7 +669,9 @@ class TeleopServer:
                     self._send(other, self._role(other))
             return
         if client is not self._controller:
-            return  # watchers watch
+            if kind == "halt":  # an e-stop anyone watching may press: halting is always safe
+                self._actions.put(("halt", {}, client))
+            return  # otherwise watchers watch
         sent = self._sent_at(client, data.get("sent"), arrived)
         self._last_heard = sent
         self._main_heard = sent - self._main_silence(data)
