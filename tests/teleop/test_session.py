@@ -283,6 +283,20 @@ def test_uncoupled_translation_moves_the_wrist_centre_and_keeps_the_wrist_still(
         teleop.command([1, 0, 0], [0, 0, 0], mode="coupled")
 
 
+def test_an_uncoupled_diagonal_is_no_faster_than_one_axis(ur5):
+    """Two axes fully deflected move the wrist centre at max_linear_speed, not sqrt(2) x it."""
+    teleop = Teleop(ur5, dt=DT, max_linear_speed=0.08, frame="base")
+    centre = wrist_centre(ur5, teleop.q, "wrist_1_joint", "wrist_2_joint")
+    now = 0.0
+    for _ in range(50):
+        teleop.command([1, 1, 0], [0, 0, 0], now=now, mode="uncoupled")
+        now += DT
+        teleop.tick(now)
+    travel = wrist_centre(ur5, teleop.q, "wrist_1_joint", "wrist_2_joint") - centre
+    assert np.linalg.norm(travel) == pytest.approx(0.08 * 50 * DT, rel=5e-3)  # Euler steps on a curve: O(dt)
+    assert travel[0] == pytest.approx(travel[1], rel=1e-2)  # still the diagonal
+
+
 def test_a_joint_driven_into_its_limit_is_held_there_and_named(ur5):
     wrist_3 = ur5.joint_id("wrist_3_joint")
     index = ur5.model.joints[wrist_3].idx_q

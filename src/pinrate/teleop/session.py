@@ -53,6 +53,7 @@ from ..control.controller import Controller, Step
 from ..control.recorder import Playback, Recorder
 from ..errors import InputError, choices_hint
 from ..kinematics.manipulator import Robot, check_robot
+from ..kinematics.spatial import saturate
 from .recording import Recording
 
 FRAMES = ("hand", "base")
@@ -418,7 +419,9 @@ class Teleop:
             index = controller.index
             wrist = controller.partition.wrist
             rates = {name: float(angular[axis]) for axis, name in enumerate(wrist[:3]) if angular[axis]}
-            command = Uncoupled(linear[index.rows[: index.m]], rates)
+            # Each axis is a deflection up to max_linear_speed: the speed of their sum is bounded too.
+            centre_velocity, _ = saturate(linear[index.rows[: index.m]], self.max_linear_speed)
+            command = Uncoupled(centre_velocity, rates)
         else:
             if self._frame == "base":
                 sensor_R_world = observation.world_T_sensor.rotation.T
