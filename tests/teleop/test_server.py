@@ -361,3 +361,14 @@ def wait_until(condition, timeout: float = 30.0) -> bool:
             return True
         time.sleep(0.01)
     return bool(condition())
+
+
+def test_with_no_page_a_command_from_python_drives_the_robot(server):
+    """No page controls: the page's dead-man rules (silent, frozen) are not the caller's."""
+    start = server.snapshot()[0]
+    deadline = time.monotonic() + 0.3
+    while time.monotonic() < deadline:
+        server.teleop.command([1, 0, 0], [0, 0, 0])
+        time.sleep(0.02)
+    assert not np.array_equal(server.snapshot()[0], start)
+    assert not server.teleop.dead_man

@@ -793,7 +793,9 @@ class TeleopServer:
                 self._state_version += 1
                 self._changed.set()
             silent = self._controller is None or now - self._last_heard > teleop.timeout
-            frozen = now - self._main_heard > self.freeze_limit
+            # The freeze rule is a controlling page's: a caller driving the Teleop from Python
+            # with no page connected is not frozen.
+            frozen = self._controller is not None and now - self._main_heard > self.freeze_limit
             if frozen and not teleop.reversing and teleop.dead_man_stop(self._frozen):
                 self._changed.set()  # on this clock, not at the next heartbeat: a late one is no delay
             if (silent or frozen) and teleop.reversing:
