@@ -456,7 +456,10 @@ def test_a_frozen_page_stops_the_robot_within_the_freeze_limit(browser, console)
     frozen = page.evaluate("() => window.__frozenAt") / 1000.0  # the page is back
     stopped = moving_until - frozen
     print(f"frozen page: the robot stopped {stopped:.3f} s after the freeze (limit {server.freeze_limit:g} s)")
-    assert server.freeze_limit - 0.1 < stopped < server.freeze_limit + 0.15  # slow pages keep going; frozen ones stop
+    # The limit counts from the main thread's last sign of life, which may come a slow frame
+    # (software rendering: up to ~0.4 s) before the freeze began: hence the lower margin. It
+    # still tells this stop from the 0.25 s dead man's.
+    assert server.freeze_limit - 0.5 < stopped < server.freeze_limit + 0.15  # slow pages keep going; frozen ones stop
     page.keyboard.up("KeyW")
     page.close()
 
