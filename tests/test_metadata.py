@@ -4,6 +4,7 @@ a licence, and an sdist that carries what the README tells users to install."""
 from __future__ import annotations
 
 import ast
+import contextlib
 import importlib.metadata
 import re
 import sys
@@ -71,6 +72,9 @@ def test_every_imported_package_is_declared() -> None:
     missing = []
     for module in sorted(imported_top_level_modules() - OPTIONAL):
         distributions = {normalise(name) for name in providers.get(module, [])}
+        if not distributions:  # Python 3.10's packages_distributions misses some wheels (matplotlib 3.9)
+            with contextlib.suppress(importlib.metadata.PackageNotFoundError):
+                distributions = {normalise(importlib.metadata.distribution(module).metadata["Name"])}
         assert distributions, f"{module} is imported but no installed distribution provides it"
         if not distributions & set(declared):
             missing.append(f"{module} (from {', '.join(sorted(distributions))})")

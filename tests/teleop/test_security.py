@@ -284,7 +284,7 @@ def test_a_claim_flood_costs_the_others_nothing(server):
         while True:
             try:
                 message = await asyncio.wait_for(operator.read_message(), 0.2)
-            except TimeoutError:
+            except asyncio.TimeoutError:  # TimeoutError itself from Python 3.11 on
                 break
             if isinstance(message, str) and json.loads(message)["type"] == "role":
                 roles += 1
@@ -323,7 +323,7 @@ def test_a_malformed_message_is_refused_and_the_socket_stays(server, message, an
         await until_role(client)
         await client.write_message(message)
         said = False
-        with contextlib.suppress(TimeoutError):
+        with contextlib.suppress(asyncio.TimeoutError):
             while True:
                 reply = await asyncio.wait_for(client.read_message(), 0.5)
                 if reply is None:
@@ -396,7 +396,7 @@ def test_an_exception_in_a_tick_halts_the_robot_says_so_once_and_the_console_goe
         events = []
         deadline = time.monotonic() + 5
         while failures["left"] > 0 and time.monotonic() < deadline:
-            with pytest.raises(TimeoutError):
+            with pytest.raises(asyncio.TimeoutError):
                 while True:
                     message = await asyncio.wait_for(client.read_message(), 0.1)
                     if isinstance(message, str) and json.loads(message)["type"] == "event":
