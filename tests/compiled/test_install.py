@@ -63,7 +63,7 @@ def _configure_tools() -> str:
     if shutil.which(os.environ.get("CXX", "c++")) is None:
         return "no C++ compiler"
     if importlib.util.find_spec("nanobind") is None:
-        return "nanobind is not installed (make core installs it)"
+        return "nanobind is not installed here (pip install ./core builds in an isolated env)"
     return ""
 
 
@@ -83,7 +83,7 @@ def test_configure_finds_the_headers_of_the_running_interpreter(tmp_path: Path) 
     if importlib.util.find_spec("cmeel") is None or not any(
         (Path(entry) / "cmeel.prefix" / "include" / "eigen3" / "Eigen" / "Core").is_file() for entry in sys.path
     ):
-        pytest.skip("cmeel-eigen is not installed here (make core installs it)")
+        pytest.skip("cmeel-eigen is not installed here (pip install cmeel-eigen libpinocchio to run this)")
     result = _configure(sys.executable, tmp_path / "build")
     assert result.returncode == 0, result.stdout + result.stderr
     headers = re.search(r"-- Headers: (.*)", result.stdout)
