@@ -58,10 +58,11 @@ def run(args: argparse.Namespace) -> int:
             f"singularity {args.singularity}, wrist {args.wrist}, dead man {args.timeout:g} s"
         )
         print("keys       W/S A/D E/Q: +-x +-y +-z   I/K J/L O/U: about +-x +-y +-z   Space: halt   B: reverse")
-        print(f"console    {server.url}   (Ctrl-C to quit)", flush=True)
-        if args.open:
-            webbrowser.open(server.url, new=2)
-        with contextlib.suppress(KeyboardInterrupt):  # the documented way to leave the console
+        # From the moment the URL is out, Ctrl-C is the documented way to leave the console.
+        with contextlib.suppress(KeyboardInterrupt):
+            print(f"console    {server.url}   (Ctrl-C to quit)", flush=True)
+            if args.open:
+                webbrowser.open(server.url, new=2)
             server.wait()
         return 0
     finally:
