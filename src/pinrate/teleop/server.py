@@ -212,6 +212,10 @@ class _Guarded(tornado.web.RequestHandler):
         policy = self.server.access
         if not policy.host_allowed(self.request.host):
             raise tornado.web.HTTPError(403, reason="Host not allowed")
+        self.refuse_beyond_host(policy)
+
+    def refuse_beyond_host(self, policy: AccessPolicy) -> None:
+        """The checks after the Host's: the token, where ``needs_token``."""
         if self.needs_token and not policy.token_allowed(self.get_query_argument("token", None)):
             raise tornado.web.HTTPError(403, reason="this console needs the URL it printed, with its token")
 
@@ -266,7 +270,7 @@ class _Recording(_Guarded):
         self.write(content)
 
 
-class _Socket(tornado.websocket.WebSocketHandler):
+class _Socket(_Guarded, tornado.websocket.WebSocketHandler):
     """One page. The handshake passes :class:`_Guarded`'s checks, the Origin rule and the cap."""
 
     def initialize(self, server: TeleopServer) -> None:
@@ -279,14 +283,8 @@ class _Socket(tornado.websocket.WebSocketHandler):
         self.clock_offset = math.inf  # the least (arrival - the page's stamp) seen, s
         self.offset_at = 0.0  # when clock_offset was last updated (monotonic s)
 
-    def set_default_headers(self) -> None:
-        for name, value in SECURITY_HEADERS.items():
-            self.set_header(name, value)
-
-    def prepare(self) -> None:
-        policy = self.server.access
-        if not policy.host_allowed(self.request.host):
-            raise tornado.web.HTTPError(403, reason="Host not allowed")
+    def refuse_beyond_host(self, policy: AccessPolicy) -> None:
+        """After the Host's (:meth:`_Guarded.prepare`): the Origin, the token, the cap."""
         if not policy.origin_allowed(self.request.headers.get("Origin"), self.request.host):
             raise tornado.web.HTTPError(403, reason="Origin not allowed")
         if not policy.token_allowed(self.get_query_argument("token", None)):
