@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -114,3 +116,14 @@ def spectral_radius_tolerance(
     with np.errstate(invalid="ignore", over="ignore"):
         tolerances = (2.0 * size) ** (1.0 - 1.0 / n) * delta ** (1.0 / n)
     return np.where(singular | ~np.isfinite(tolerances), np.inf, tolerances)
+
+
+def wait_for(condition: Callable[[], object], timeout: float = 5.0) -> bool:
+    """Poll ``condition`` every 10 ms until it holds or ``timeout`` s pass; whether it held
+    (for tests of threads and servers that act on their own time)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return True
+        time.sleep(0.01)
+    return bool(condition())

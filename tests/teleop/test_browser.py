@@ -76,14 +76,20 @@ def console(ur5, tmp_path):
         server.close()
 
 
-def open_console(browser, server, *, pad: bool = False):
+def connected_page(browser, server, script: str | None = None):
+    """A page on the console (``script`` run before the page's own), controlling, framed once."""
     page = browser.new_page()
-    if pad:
-        page.add_init_script(FAKE_PAD)
+    if script is not None:
+        page.add_init_script(script)
     page.goto(server.url)
     page.wait_for_function(
         "() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0", timeout=60_000
     )
+    return page
+
+
+def open_console(browser, server, *, pad: bool = False):
+    page = connected_page(browser, server, FAKE_PAD if pad else None)
     wait_until(lambda: page.evaluate("() => window.viewer.scene_tree.find(['meshcat', 'markers', 'hand']).object"))
     page.wait_for_timeout(500)  # the meshes parse
     return page
@@ -411,12 +417,7 @@ def test_a_slow_page_keeps_the_robot_moving_as_commanded(browser, console):
     """Main thread blocked 600 ms a frame, the default 0.25 s dead man: a held W moves the hand
     at least 90 % of speed x held time, and a reversal comes all the way back."""
     server = console(timeout=DEAD_MAN)
-    page = browser.new_page()
-    page.add_init_script(SLOW_FRAMES)
-    page.goto(server.url)
-    page.wait_for_function(
-        "() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0", timeout=60_000
-    )
+    page = connected_page(browser, server, SLOW_FRAMES)
     start = still(server)
     hand = server.sensor_pose(start)[:3, :3]
     hold(page, "KeyW", 2.0)
@@ -638,12 +639,7 @@ def held_counts(page, since: int) -> float:
 
 def test_a_spacemouse_drives_the_hand_like_two_3_axis_controllers(browser, console):
     server = console()
-    page = browser.new_page()
-    page.add_init_script(FAKE_SPACEMOUSE)
-    page.goto(server.url)
-    page.wait_for_function(
-        "() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0", timeout=60_000
-    )
+    page = connected_page(browser, server, FAKE_SPACEMOUSE)
     page.click("#spacemouse-connect")
     page.wait_for_function("() => document.getElementById('spacemouse').textContent.includes('SpaceMouse Compact')")
     filters = page.evaluate("() => window.__hidFilters")
@@ -694,12 +690,7 @@ Navigator.prototype.getGamepads = function () {
 
 def test_a_spacemouse_offered_as_a_gamepad_is_ignored_and_said_so(browser, console):
     server = console()
-    page = browser.new_page()
-    page.add_init_script(SPACEMOUSE_PAD)
-    page.goto(server.url)
-    page.wait_for_function(
-        "() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0", timeout=60_000
-    )
+    page = connected_page(browser, server, SPACEMOUSE_PAD)
     start = still(server)
     time.sleep(0.6)  # its "right stick" (the cap's translation read as a standard pad) held over the dead zone
     np.testing.assert_array_equal(server.snapshot()[0], start)

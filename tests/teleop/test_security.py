@@ -27,6 +27,7 @@ import tornado.websocket
 import pinrate
 from pinrate.teleop import server as server_module
 from pinrate.teleop.server import MAX_PAGES, TeleopServer
+from support import wait_for
 
 KEY = "dGhlIHNhbXBsZSBub25jZQ=="  # any 16 bytes, base64: RFC 6455's example
 
@@ -88,15 +89,6 @@ async def until_role(client: tornado.websocket.WebSocketClientConnection) -> dic
         assert message is not None, "the server closed the socket"
         if isinstance(message, str) and json.loads(message)["type"] == "role":
             return json.loads(message)
-
-
-def wait_for(condition, timeout: float = 5.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.01)
-    return condition()
 
 
 # ---------------------------------------------------------------- who may connect

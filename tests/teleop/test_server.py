@@ -20,6 +20,7 @@ import tornado.websocket
 
 import pinrate
 from pinrate.teleop.server import TeleopServer
+from support import wait_for
 
 COMMAND = [sys.executable, "-m", "pinrate.cli"]
 
@@ -314,7 +315,7 @@ def test_each_catch_up_tick_is_recorded_at_its_own_time(server):
 
     server.teleop.tick = sometimes_slow
     recorded_run(server, 0.5)
-    assert wait_until(lambda: len(server.saved) == 2)
+    assert wait_for(lambda: len(server.saved) == 2, timeout=30)
     times = captured[0].times
     assert times.size > 100
     assert np.all(np.diff(times) > 0)  # no two ticks share a stamp
@@ -348,19 +349,10 @@ def test_a_recording_without_a_tick_is_said_and_not_saved(server, caplog):
     server.teleop.halt()  # the loop still ticks; stop the recording before any tick lands
     server._actions.put(("record", {"on": True}, None))
     server._actions.put(("record", {"on": False}, None))
-    assert wait_until(lambda: any("no tick was recorded" in text for text in messages))
+    assert wait_for(lambda: any("no tick was recorded" in text for text in messages), timeout=30)
     time.sleep(0.3)
     assert server.saved == []  # nothing to replay: no files, and no save thread died
     assert not [record for record in caplog.records if record.levelname == "ERROR"]
-
-
-def wait_until(condition, timeout: float = 30.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.01)
-    return bool(condition())
 
 
 def test_with_no_page_a_command_from_python_drives_the_robot(server):
