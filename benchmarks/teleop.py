@@ -7,11 +7,15 @@ Debian's Chromium at /usr/bin/chromium and Playwright, as the browser tests).
 1. **Baseline, same process, same run**: a bare loop that sleeps to the same absolute
    deadlines and does nothing else, so the ratio shows what the controller, the web thread
    and the render thread cost on top of Python's own sleep.
-2. **Console**: ``TeleopServer(Teleop(ur5, dt=1/rate))`` with one headless Chromium page
-   attached; every loop period (wake-up to wake-up) is kept. The page is driven by key
-   presses (W, then S, 250 ms each, so the hand wanders back and forth near home); each
-   press's latency is measured in the page from ``keydown`` to the animation frame after the
-   first frame of poses that the moved robot produced (``window.pinrate.latencies``).
+2. **Console**, twice: ``TeleopServer(Teleop(ur5, dt=1/rate))`` with one headless Chromium
+   page attached, first with the control thread under normal scheduling, then asking for
+   real-time (``SCHED_FIFO``, :func:`pinrate.teleop.pacing.request_realtime`; the row says
+   what the OS granted); every loop period (wake-up to wake-up) is kept. The page is driven
+   by key presses (W, then S, 250 ms each, so the hand wanders back and forth near home)
+   while the run is recorded; each press's latency is measured in the page from ``keydown``
+   to the animation frame after the first frame of poses that the moved robot produced
+   (``window.pinrate.latencies``).
+3. **Saving**: the periods from "stop recording" until both files (.npz, .html) are written.
 
 Targets (issue 12): >= 990 Hz sustained, p99 period <= 2 ms, key to paint <= 30 ms median.
 """
@@ -21,6 +25,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -57,19 +62,23 @@ def summary(periods: np.ndarray) -> tuple[float, float, float]:
     return periods.size / periods.sum(), float(np.median(periods) * 1e3), float(np.percentile(periods, 99) * 1e3)
 
 
-def measure(rate: float, seconds: float, presses: int, width: int, height: int) -> dict[str, object]:
-    baseline = []
-    holder = threading.Thread(target=lambda: baseline.append(bare_loop(rate, min(seconds, 5.0))))
-    holder.start()
-    holder.join()
-
+def drive(
+    rate: float, seconds: float, presses: int, width: int, height: int, priority: int | None, folder: str
+) -> dict[str, object]:
+    """One console with a page attached: its loop periods while driven (recording the
+    while), the periods while that recording is saved, key-to-paint latencies, and what
+    scheduling the control thread got."""
     robot = pinrate.load("ur5")
     teleop = pinrate.Teleop(robot, dt=1.0 / rate, timeout=1.0)
-    with TeleopServer(teleop) as server, chromium(width, height) as context:
+    with (
+        TeleopServer(teleop, realtime_priority=priority, record_dir=folder) as server,
+        chromium(width, height) as context,
+    ):
         page = context.new_page()
         page.goto(server.url)
         page.wait_for_function("() => window.pinrate && window.pinrate.controlling && window.pinrate.frames > 0")
         page.wait_for_timeout(2000)  # meshes parsed
+        server.act("record", on=True)
         server.stats.periods.clear()
         started = time.monotonic()
         key = "KeyW"
@@ -85,8 +94,19 @@ def measure(rate: float, seconds: float, presses: int, width: int, height: int) 
             else:
                 page.wait_for_timeout(100)
         periods = server.stats.recent(float("inf"))
+        before = len(server.stats.periods)
+        server.act("record", on=False)
+        while len(server.saved) < 2:
+            page.wait_for_timeout(20)
+        page.wait_for_timeout(100)
+        saving = np.array(list(server.stats.periods)[before:])
         latencies = page.evaluate("() => window.pinrate.latencies")
-    return {"baseline": baseline[0], "periods": periods, "latencies": np.array(latencies)}
+    return {
+        "periods": periods,
+        "saving": saving,
+        "latencies": np.array(latencies),
+        "scheduling": server.scheduling,
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -96,31 +116,48 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--presses", type=int, default=30, help="key presses whose latency is measured")
     parser.add_argument("--width", type=int, default=1200)
     parser.add_argument("--height", type=int, default=760)
+    parser.add_argument("--realtime-priority", type=int, default=50, help="SCHED_FIFO priority asked for")
     timing.add_arguments(parser)
     args = parser.parse_args(argv)
     if not Path(CHROMIUM).exists():
         print(f"needs Chromium at {CHROMIUM}", file=sys.stderr)
         return 2
-    result = measure(args.rate, args.seconds, args.presses, args.width, args.height)
-    base_rate, base_median, base_p99 = summary(result["baseline"])
-    rate, median, p99 = summary(result["periods"])
-    latencies = result["latencies"]
-    print(f"UR5, target {args.rate:g} Hz, {result['periods'].size} loop periods, {latencies.size} key presses\n")
-    print("| loop | rate (Hz) | period median (ms) | period p99 (ms) | p99 × bare |")
-    print("|---|---:|---:|---:|---:|")
-    print(f"| bare sleep-to-deadline loop (baseline) | {base_rate:.1f} | {base_median:.3f} | {base_p99:.3f} | 1.00 |")
-    print(f"| teleop console, page attached | {rate:.1f} | {median:.3f} | {p99:.3f} | {p99 / base_p99:.2f} |")
-    if latencies.size:
-        print(
-            f"\nkey to painted frame (Chromium, headless): median {statistics.median(latencies):.1f} ms, "
-            f"max {latencies.max():.1f} ms, p90 {np.percentile(latencies, 90):.1f} ms"
-        )
-    rows = [
-        timing.row_of("bare loop period", result["baseline"].tolist()),
-        timing.row_of("teleop console loop period", result["periods"].tolist()),
-    ]
-    if latencies.size:
-        rows.append(timing.row_of("key to painted frame", (latencies * 1e-3).tolist()))
+    holder: list[np.ndarray] = []
+    thread = threading.Thread(target=lambda: holder.append(bare_loop(args.rate, min(args.seconds, 5.0))))
+    thread.start()
+    thread.join()
+    baseline = holder[0]
+    runs = {}
+    with tempfile.TemporaryDirectory() as folder:
+        for label, priority in (("normal", None), ("real-time", args.realtime_priority)):
+            runs[label] = drive(args.rate, args.seconds, args.presses, args.width, args.height, priority, folder)
+    base_rate, base_median, base_p99 = summary(baseline)
+    print(f"UR5, target {args.rate:g} Hz, {args.presses} key presses per console\n")
+    print("| loop | rate (Hz) | period median (ms) | period p99 (ms) | p99 × bare | max (ms) |")
+    print("|---|---:|---:|---:|---:|---:|")
+    print(
+        f"| bare sleep-to-deadline loop, no page (baseline) | {base_rate:.1f} | {base_median:.3f} | "
+        f"{base_p99:.3f} | 1.00 | {baseline.max() * 1e3:.1f} |"
+    )
+    rows = [timing.row_of("bare loop period", baseline.tolist())]
+    for label, run in runs.items():
+        for part, name in (("periods", "driven"), ("saving", "saving a recording")):
+            periods = run[part]
+            rate, median, p99 = summary(periods)
+            print(
+                f"| console, page attached, {name}: {run['scheduling']} | {rate:.1f} | {median:.3f} | {p99:.3f} | "
+                f"{p99 / base_p99:.2f} | {periods.max() * 1e3:.1f} |"
+            )
+            rows.append(timing.row_of(f"console loop period, {label}, {name}", periods.tolist()))
+    for label, run in runs.items():
+        latencies = run["latencies"]
+        if latencies.size:
+            print(
+                f"\nkey to painted frame ({label} scheduling; Chromium, headless): median "
+                f"{statistics.median(latencies):.1f} ms, p90 {np.percentile(latencies, 90):.1f} ms, "
+                f"max {latencies.max():.1f} ms"
+            )
+            rows.append(timing.row_of(f"key to painted frame, {label}", (latencies * 1e-3).tolist()))
     timing.finish(rows, args, {"rate": args.rate, "seconds": args.seconds, "presses": args.presses})
     return 0
 

@@ -815,7 +815,8 @@ def test_benchmark_smoke():
         check=False,
     )
     assert result.returncode == 0, result.stderr[-2000:]
-    assert "teleop console, page attached" in result.stdout and "key to painted frame" in result.stdout
+    assert "console, page attached, driven" in result.stdout and "saving a recording" in result.stdout
+    assert "key to painted frame" in result.stdout
 
 
 def test_a_shared_console_is_driven_from_its_tokened_url_only(browser, ur5, tmp_path):

@@ -178,3 +178,43 @@ def test_demo_records_html(tmp_path) -> None:
     assert result.returncode == 0, result.stderr[-2000:]
     assert "segment 1/2" in result.stdout and "segment 2/2" in result.stdout
     assert out.stat().st_size > 10_000
+
+
+def test_save_replay_animates_the_recorded_configurations(tmp_path) -> None:
+    # The replay's last keyframe of the TCP marker is the tip's pose at the last configuration,
+    # as the robot itself computes it (robot.pose: its own pin.Data, no viewer code), and the
+    # page carries the scene's commands as well as the animation.
+    import base64
+    import re
+
+    import umsgpack
+
+    robot = pinrate.load("ur5")
+    viewer = Viewer(robot, offline=True)
+    rng = np.random.default_rng(3)
+    configurations = np.array([robot.random_configuration(rng) for _ in range(5)])
+    page = viewer.save_replay(tmp_path / "replay.html", configurations, fps=10, loop=False)
+    texts = re.findall(r'^  "([A-Za-z0-9+/=]*)"( \+)?', page.read_text(), re.M)
+    commands, current = [], ""
+    for text, joined in texts:
+        current += text
+        if not joined:
+            commands.append(umsgpack.unpackb(base64.b64decode(current)))
+            current = ""
+    assert len(commands) == len(viewer.scene.packed()) + 1
+    animation = commands[-1]
+    assert animation["type"] == "set_animation" and animation["options"]["repetitions"] == 1
+    (tcp,) = [entry for entry in animation["animations"] if entry["path"].endswith("markers/tcp")]
+    tracks = {track["name"]: track for track in tcp["clip"]["tracks"]}
+    times = np.frombuffer(tracks[".position"]["times"].data, dtype=np.float32)
+    np.testing.assert_array_equal(times, np.arange(5))
+    positions = np.frombuffer(tracks[".position"]["values"].data, dtype=np.float32).reshape(5, 3)
+    quaternions = np.frombuffer(tracks[".quaternion"]["values"].data, dtype=np.float32).reshape(5, 4)
+    for index, q in enumerate(configurations):
+        expected = pin.SE3ToXYZQUAT(pin.SE3(robot.pose(q)))  # x y z qx qy qz qw
+        # float32 storage: 6e-8 relative; a quaternion is defined up to its sign.
+        np.testing.assert_allclose(positions[index], expected[:3], atol=1e-6)
+        sign = np.sign(np.dot(quaternions[index], expected[3:]))
+        np.testing.assert_allclose(sign * quaternions[index], expected[3:], atol=1e-6)
+    with Viewer(robot) as live, pytest.raises(pinrate.InputError, match="offline"):
+        live.save_replay(tmp_path / "x.html", configurations)

@@ -57,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
             f"teleop     {robot.name}: {args.rate:g} Hz, {teleop.controller.algorithm}, "
             f"singularity {args.singularity}, wrist {args.wrist}, dead man {args.timeout:g} s"
         )
+        print(f"loop       {server.scheduling}")
         print("keys       W/S A/D E/Q: +-x +-y +-z   I/K J/L O/U: about +-x +-y +-z   Space: halt   B: reverse")
         # From the moment the URL is out, Ctrl-C is the documented way to leave the console.
         with contextlib.suppress(KeyboardInterrupt):

@@ -57,7 +57,6 @@ import threading
 import time
 import traceback
 import warnings
-from collections import deque
 from datetime import datetime
 from pathlib import Path
 from typing import Any
@@ -79,6 +78,7 @@ from ..viewer.server import check_host
 from .access import SECURITY_HEADERS, AccessPolicy
 from .display import describe, joint_gauges, joint_values
 from .mapping import KEYS, deflections
+from .pacing import MIN_SLEEP, REALTIME_PRIORITY, LoopStats, request_realtime
 from .recording import Recording
 from .session import FRAMES, MODES, Teleop
 
@@ -88,9 +88,6 @@ RENDER_RATE = 60.0
 
 MAX_CATCH_UP = 0.1
 """Seconds of missed ticks a late control loop runs at once; beyond, the motion waits."""
-
-STATS_WINDOW = 2.0
-"""Seconds of control-loop periods the rate and p99 on the page are measured over."""
 
 REPLAY_FPS = 30.0
 """Frames per second of a recording's HTML replay."""
@@ -138,40 +135,6 @@ SWITCH_INTERVAL = 2e-4
 """Seconds a thread holding the GIL runs before a waiting one may take it, while a console
 runs (CPython's default, 5 ms, lets the render or web thread delay a 1 kHz tick by up to
 5 ms; restored on close)."""
-
-
-class LoopStats:
-    """The control loop's recent wake-up periods (s): rate, median and p99."""
-
-    def __init__(self, capacity: int = 200_000) -> None:
-        self.periods: deque[float] = deque(maxlen=capacity)
-        self._lock = threading.Lock()
-
-    def add(self, period: float) -> None:
-        with self._lock:
-            self.periods.append(period)
-
-    def recent(self, seconds: float) -> np.ndarray:
-        """The periods of the last ``seconds`` of loop time, oldest first."""
-        with self._lock:
-            periods = list(self.periods)
-        total, count = 0.0, 0
-        for period in reversed(periods):
-            total += period
-            count += 1
-            if total >= seconds:
-                break
-        return np.array(periods[len(periods) - count :])
-
-    def summary(self, seconds: float = STATS_WINDOW) -> dict[str, float]:
-        periods = self.recent(seconds)
-        if not periods.size:
-            return {"rate": 0.0, "median_ms": 0.0, "p99_ms": 0.0}
-        return {
-            "rate": float(periods.size / periods.sum()) if periods.sum() > 0 else 0.0,
-            "median_ms": float(np.median(periods) * 1e3),
-            "p99_ms": float(np.percentile(periods, 99) * 1e3),
-        }
 
 
 def _retrieved(future: Any) -> None:
@@ -353,11 +316,15 @@ class TeleopServer:
             files this server writes there are served.
         token: the URL's token (see :class:`~.access.AccessPolicy`): None chooses (a random
             one off loopback, none on it).
+        realtime_priority: the ``SCHED_FIFO`` priority the control thread asks for
+            (:func:`~.pacing.request_realtime`; granted to root, ``CAP_SYS_NICE`` or an
+            ``rtprio`` limit, else the thread runs as any other); None asks for nothing.
 
     Attributes:
         url: the console's URL: a real address, the port and the token when there is one.
         access: the :class:`~.access.AccessPolicy` every request and handshake passes.
         saved: the files recordings wrote, in order.
+        scheduling: what the control thread runs under, in words (once it started).
     """
 
     def __init__(
@@ -369,6 +336,7 @@ class TeleopServer:
         render_rate: float = RENDER_RATE,
         record_dir: str | Path = ".",
         token: str | None = None,
+        realtime_priority: int | None = REALTIME_PRIORITY,
     ) -> None:
         if not isinstance(teleop, Teleop):
             raise InputError(f"TeleopServer takes a pinrate.Teleop, not {type(teleop).__name__}")
@@ -381,6 +349,15 @@ class TeleopServer:
             raise InputError(f"port must be an integer in [0, 65535], got {port!r}")
         self.render_rate = check_positive(render_rate, "render_rate")
         self.record_dir = check_output_folder(record_dir, "record folder")
+        if realtime_priority is not None and (
+            isinstance(realtime_priority, bool)
+            or not isinstance(realtime_priority, int)
+            or not 1 <= realtime_priority <= 99
+        ):
+            raise InputError(f"realtime_priority must be None or an integer in [1, 99], got {realtime_priority!r}")
+        self.realtime_priority = realtime_priority
+        self.scheduling = ""
+        self._scheduled = threading.Event()
         self.stats = LoopStats()
         self.saved: list[Path] = []
         self.served: dict[str, Path] = {}
@@ -459,6 +436,7 @@ class TeleopServer:
         if not self._web_ready.wait(10.0):
             self.close()
             raise PinrateError("the teleop web server did not start within 10 s")
+        self._scheduled.wait(5.0)
 
     # ------------------------------------------------------------------ life
     def __enter__(self) -> TeleopServer:
@@ -594,6 +572,7 @@ class TeleopServer:
             "joints": [gauge.__dict__ for gauge in self._gauges],
             "keys": sorted(KEYS),
             "rate": self.rate,
+            "scheduling": self.scheduling,
             "timeout": teleop.timeout,
             "freeze_limit": self.freeze_limit,
             "max_linear_speed": teleop.max_linear_speed,
@@ -757,6 +736,8 @@ class TeleopServer:
 
     # ------------------------------------------------------------------ control thread
     def _control(self) -> None:
+        self.scheduling = request_realtime(self.realtime_priority)
+        self._scheduled.set()
         teleop = self.teleop
         period = teleop.controller.dt
         started = time.monotonic()
@@ -809,9 +790,9 @@ class TeleopServer:
                 self._changed.set()
             deadline += period
             delay = deadline - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            elif delay < -MAX_CATCH_UP:
+            # Always a little sleep, however late: a real-time thread never takes a core whole.
+            time.sleep(max(delay, MIN_SLEEP))
+            if delay < -MAX_CATCH_UP:
                 deadline = time.monotonic()  # far behind: start afresh rather than race
 
     def _failed(self, error: BaseException) -> None:
@@ -923,14 +904,9 @@ class TeleopServer:
         stem = self._stem()
         try:
             data = recording.save(stem.with_suffix(".npz"))
-            replay = Viewer(self.robot, offline=True)
-            replay.draw_hand_axes()
-            frames = recording.frames(REPLAY_FPS)
-            if len(frames):
-                replay.frame(frames[0])
-            for q in frames:
-                replay.show(q)
-            page = replay.save_html(stem.with_suffix(".html"), fps=REPLAY_FPS)
+            # The console's own scene, already encoded: no mesh is read again, and no step
+            # holds the GIL long enough to delay the control loop's tick.
+            page = self.viewer.save_replay(stem.with_suffix(".html"), recording.frames(REPLAY_FPS), fps=REPLAY_FPS)
         except (PinrateError, OSError) as error:
             self._event(f"the recording could not be saved: {error}", "error")
             return

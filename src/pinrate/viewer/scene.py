@@ -32,7 +32,6 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import meshcat
-import meshcat.animation
 import meshcat.geometry as g
 import numpy as np
 import pinocchio as pin
@@ -43,7 +42,7 @@ from ..control.trajectory import Trajectory
 from ..errors import InputError
 from ..kinematics.manipulator import Robot, check_robot
 from .collada import one_material_per_mesh
-from .offline import SceneCommands
+from .offline import Animation, SceneCommands
 from .server import MeshcatServer, check_reachable
 from .skeleton import Skeleton
 
@@ -263,15 +262,18 @@ class Viewer:
     def node_transforms(self, q: np.ndarray) -> dict[str, np.ndarray]:
         """Meshcat path -> 4x4 transform (relative to ``/meshcat``: the world frame, metres) of
         every visual geometry, every skeleton body and the tip/sensor markers at q."""
-        model, data = self.robot.model, self.data
-        q = self.robot.check_q(q)
+        return self._node_transforms(self.robot.check_q(q), self.data, self._geometry_data)
+
+    def _node_transforms(self, q: np.ndarray, data: pin.Data, geometry_data: pin.GeometryData) -> dict[str, np.ndarray]:
+        """:meth:`node_transforms` on the given Pinocchio data (one per thread)."""
+        model = self.robot.model
         pin.forwardKinematics(model, data, q)
-        pin.updateGeometryPlacements(model, data, self.robot.visual_model, self._geometry_data)
+        pin.updateGeometryPlacements(model, data, self.robot.visual_model, geometry_data)
         transforms = {}
         for index, geometry in enumerate(self.robot.visual_model.geometryObjects):
             scale = np.diag(np.concatenate([np.asarray(geometry.meshScale).ravel(), [1.0]]))
             name = self._visualizer.getViewerNodeName(geometry, pin.GeometryType.VISUAL)
-            transforms[name] = self._geometry_data.oMg[index].homogeneous @ scale
+            transforms[name] = geometry_data.oMg[index].homogeneous @ scale
         transforms.update(self.skeleton.transforms(data))
         transforms["markers/tcp"] = np.array(pin.updateFramePlacement(model, data, self.robot.tip_id).homogeneous)
         world_T_sensor = np.array(pin.updateFramePlacement(model, data, self.robot.sensor_id).homogeneous)
@@ -372,23 +374,54 @@ class Viewer:
     def recorded_frames(self) -> int:
         return len(self._frames)
 
-    def animation(self, fps: float = 30.0) -> meshcat.animation.Animation:
-        """The recorded frames as a Meshcat animation (one keyframe per :meth:`show`)."""
-        animation = meshcat.animation.Animation(default_framerate=fps)
-        for index, transforms in enumerate(self._frames):
-            with animation.at_frame(self.meshcat, index) as frame:
-                for name, transform in transforms.items():
-                    frame[name].set_transform(transform)
-        return animation
+    def animation(self, fps: float = 30.0, *, loop: bool = True) -> Animation:
+        """The recorded frames (one per :meth:`show`) as meshcat's ``set_animation`` command."""
+        return self._animation(self._frames, check_positive(fps, "fps"), loop)
+
+    def _animation(self, frames: Sequence[dict[str, np.ndarray]], fps: float, loop: bool) -> Animation:
+        """Each node's position and quaternion in each frame; a transform's scale (a mesh's
+        units) stays in the scene's own transform, which the animation leaves alone."""
+        names = list(frames[0]) if frames else []
+        poses = np.empty((len(frames), len(names), 7))
+        for index, transforms in enumerate(frames):
+            for column, name in enumerate(names):
+                transform = transforms[name]
+                rotation = transform[:3, :3] / np.linalg.norm(transform[:3, :3], axis=0)
+                poses[index, column, :3] = transform[:3, 3]
+                poses[index, column, 3:] = pin.Quaternion(rotation).coeffs()  # x y z w, as three.js
+        paths = [self.meshcat[name].path.lower() for name in names]
+        return Animation(paths, poses, fps, repetitions=10**9 if loop else 1)
 
     def save_html(self, path: str | os.PathLike[str], *, fps: float = 30.0, loop: bool = True) -> Path:
         """A standalone HTML page of the scene that replays every recorded frame, offline."""
-        if self._frames:
-            self.meshcat.set_animation(self.animation(fps), play=True, repetitions=10**9 if loop else 1)
+        fps = check_positive(fps, "fps")
         target = check_output_file(path, "replay file")
-        page = self.scene.static_html() if self.scene is not None else self.meshcat.static_html()
-        target.write_text(page, encoding="utf-8")
+        animation = self._animation(self._frames, fps, loop) if self._frames else None
+        if self.scene is not None:
+            return self.scene.write_html(target, extra=[animation.packed()] if animation else [])
+        if animation is not None:
+            self.meshcat.window.send(animation)
+        target.write_text(self.meshcat.static_html(), encoding="utf-8")
         return target
+
+    def save_replay(
+        self, path: str | os.PathLike[str], configurations: np.ndarray, *, fps: float = 30.0, loop: bool = True
+    ) -> Path:
+        """A standalone HTML page of this offline viewer's scene that replays
+        ``configurations`` (F, nq) at ``fps``; the scene itself is left as it is.
+
+        Safe beside a thread that draws with this viewer (the teleop console's render thread):
+        the poses come from a Pinocchio data of this call's own, and the scene's commands,
+        already encoded, are reused rather than the meshes read and encoded again.
+        """
+        if self.scene is None:
+            raise InputError("save_replay needs an offline viewer (Viewer(robot, offline=True))")
+        fps = check_positive(fps, "fps")
+        target = check_output_file(path, "replay file")
+        data, geometry_data = self.robot.model.createData(), self.robot.visual_model.createData()
+        frames = [self._node_transforms(self.robot.check_q(q), data, geometry_data) for q in configurations]
+        extra = [self._animation(frames, fps, loop).packed()] if frames else []
+        return self.scene.write_html(target, extra=extra)
 
     def close(self) -> None:
         """Stop the Meshcat server this viewer started."""

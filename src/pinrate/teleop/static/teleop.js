@@ -289,6 +289,7 @@
     state.hello = hello;
     state.moveKeys = new Set(hello.keys);
     $("robot").textContent = `· ${hello.robot}`;
+    $("rate").title = $("p99").title = `control loop: ${hello.scheduling}`;
     document.title = `pinrate teleop · ${hello.robot}`;
     for (const [id, names, chosen] of [["singularity", hello.singularities, hello.singularity],
                                        ["wrist", hello.wrists, hello.wrist]]) {
