@@ -620,13 +620,27 @@ FAKE_SPACEMOUSE = """
   hid.requestDevice = async (options) => { window.__hidFilters = options.filters; return [device]; };
   hid.getDevices = async () => (device.opened ? [device] : []);
   Object.defineProperty(Navigator.prototype, "hid", { get: () => hid, configurable: true });
-  window.__report = (id, counts) => {
+  const send = (id, counts) => {
     const view = new DataView(new ArrayBuffer(2 * counts.length));
     counts.forEach((count, i) => view.setInt16(2 * i, count, true));
     const event = new Event("inputreport");
     Object.assign(event, { reportId: id, data: view, device });
     device.dispatchEvent(event);
   };
+  // As the hardware does, a deflected cap repeats its report (here every 8 ms) until it is
+  // back at rest; window.__silence() makes it stop reporting, deflected or not.
+  const latest = {};
+  let silent = false;
+  window.__report = (id, counts) => {
+    if (id === 1 && counts.length >= 6) delete latest[2];  // a newer model: one report of six
+    latest[id] = counts;
+    send(id, counts);
+  };
+  window.__silence = () => { silent = true; };
+  setInterval(() => {
+    if (silent) return;
+    for (const [id, counts] of Object.entries(latest)) if (counts.some(Boolean)) send(Number(id), counts);
+  }, 8);
 })();
 """
 
@@ -671,6 +685,25 @@ def test_a_spacemouse_drives_the_hand_like_two_3_axis_controllers(browser, conso
     angle = pin.log3(rotation.T @ server.sensor_pose(turned)[:3, :3])  # in the hand's axes
     assert angle[2] == pytest.approx(0.5 * held, rel=0.05)
     assert np.linalg.norm(angle[:2]) < 0.03 * angle[2]
+    page.close()
+
+
+def test_a_spacemouse_that_falls_silent_while_deflected_stops_the_hand(browser, console):
+    # A cap held deflected whose reports stop (a USB hiccup): its last counts are not held
+    # forever; the robot stops within the page's HID_STALE_MS (0.5 s) and a heartbeat.
+    server = console()
+    page = connected_page(browser, server, FAKE_SPACEMOUSE)
+    page.click("#spacemouse-connect")
+    page.wait_for_function("() => document.getElementById('spacemouse').textContent.includes('SpaceMouse Compact')")
+    page.evaluate("() => window.__report(1, [0, -350, 0])")
+    wait_until(lambda: server.snapshot()[1] is not None and server.snapshot()[1].joint_rates.any())
+    page.evaluate("() => window.__silence()")
+    silenced = time.monotonic()
+    wait_until(lambda: not server.snapshot()[1].joint_rates.any(), timeout=5.0)
+    # the stale limit, then a poll on a main thread that software rendering may block (the freeze
+    # limit bounds that: a page blocked longer stops the robot by that rule)
+    assert time.monotonic() - silenced < 0.5 + server_module.FREEZE_LIMIT
+    assert "silent" in page.inner_text("#spacemouse")
     page.close()
 
 

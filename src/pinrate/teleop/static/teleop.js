@@ -87,6 +87,11 @@
   // change goes out at once, otherwise the poll is the main thread's sign of life.
   let lastPad = "null";
   function poll() {
+    if (hidDevice && state.hid.some(Boolean) && performance.now() - hidHeardAt > HID_STALE_MS) {
+      state.hid = [0, 0, 0, 0, 0, 0];
+      $("spacemouse").textContent = `SpaceMouse silent for ${HID_STALE_MS} ms while deflected: stopped`;
+      sendInput();
+    }
     const pad = gamepad();
     const text = JSON.stringify(pad && [pad.axes, pad.buttons]);
     if (text !== lastPad) {
@@ -118,11 +123,16 @@
   // dead zone, the full scale (±350) and the hand axes. Sent at most every HID_MS (a device
   // reports at 60-125 Hz), and as the heartbeat's payload.
   const HID_MS = 25;
+  // A deflected cap reports continuously (every 8-16 ms); one silent this long while its last
+  // counts were not zero (a USB hiccup, a dying battery) counts as released.
+  const HID_STALE_MS = 500;
   const SPACEMOUSE_FILTERS = [0x256f, 0x046d].map((vendorId) => ({ vendorId, usagePage: 0x01, usage: 0x08 }));
   let hidDevice = null;
   let hidPending = null;
   let hidSentAt = -Infinity;
+  let hidHeardAt = -Infinity;
   function onReport(event) {
+    hidHeardAt = performance.now();
     const data = event.data;
     const count = (i) => data.getInt16(2 * i, true);
     const before = state.hid.join();
