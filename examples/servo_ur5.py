@@ -19,5 +19,5 @@ print(
 print(
     f"spectral radius along the path: {trajectory.spectral_radius.min():.3f} .. "
     f"{trajectory.spectral_radius.max():.3f} (< 1 at every step: the Theorem's test passes pointwise; "
-    "it is not a guarantee along a path, see README)"
+    "it is not a guarantee along a path, see docs/choices.md)"
 )
