@@ -1,5 +1,5 @@
 """Every refused command line ends in one line ``pinrate: error: ...`` and exit code 2, before
-any work starts; never a traceback (pinrate.cli.arguments, pinrate.cli.commands)."""
+any work starts; never a traceback (pinrate.cli.arguments, pinrate.cli.robot_arguments)."""
 
 from __future__ import annotations
 

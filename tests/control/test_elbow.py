@@ -1,5 +1,5 @@
 """Barker's auxiliary elbow control (eq. 45-46) against the paper's closed forms: the upper
-arm's axes X2, Y2 from R_2^1 R_1^0 (eq. B25-B29, :func:`pinrate.papers.barker.upper_arm_axes`),
+arm's axes X2, Y2 from R_2^1 R_1^0 (eq. B25-B29, :func:`pinrate.papers.barker_elbow.upper_arm_axes`),
 F1 from eq. 27; and on the UR5, the hand retracting toward the shoulder."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pytest
 
 import pinrate
 from pinrate import Controller, InputError, JointJog, Status
-from pinrate.papers.barker import upper_arm_axes
+from pinrate.papers.barker_elbow import upper_arm_axes
 
 UNLIMITED = {"velocity_limits": np.inf, "position_limits": False}
 

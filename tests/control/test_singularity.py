@@ -13,7 +13,7 @@ import pytest
 import pinrate
 from pinrate import Controller, Status
 from pinrate.control.singularity import STRATEGIES, WRIST_STRATEGIES
-from pinrate.papers.barker import barker_m, barker_singular_configurations
+from pinrate.papers.barker_jacobian import barker_m, barker_singular_configurations
 
 UNLIMITED = {"velocity_limits": np.inf, "position_limits": False}
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 import pinrate
-from pinrate.cli.commands import verdict_lines
+from pinrate.cli.demo import verdict_lines
 from pinrate.theorem import coupling_along
 
 IRB140 = Path(__file__).parent.parent / "data" / "third_party" / "rtb_irb140.urdf"

@@ -130,13 +130,27 @@ def _command(name: str) -> Callable[[argparse.Namespace], int]:
     """The function that runs subcommand ``name``. Only here does its module load, and with it
     what the command needs: numpy and Pinocchio for all, matplotlib for ``analyze`` and
     ``paper``; the parser imports none of them."""
-    if name in ("analyze", "paper"):
-        from .reporting import COMMANDS
-    elif name == "teleop":
-        from .teleop import COMMANDS
-    else:
-        from .commands import COMMANDS
-    return COMMANDS[name]
+    if name == "list":
+        from .robot_list import list_robots
+
+        return list_robots
+    if name == "demo":
+        from .demo import demo
+
+        return demo
+    if name == "analyze":
+        from .analyze import analyze
+
+        return analyze
+    if name == "paper":
+        from .paper_results import paper
+
+        return paper
+    if name == "teleop":
+        from .teleop import run
+
+        return run
+    raise KeyError(name)  # the parser offers no other name
 
 
 def _version() -> str:

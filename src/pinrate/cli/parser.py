@@ -2,10 +2,10 @@
 
 Parsing imports nothing heavy: ``pinrate --help``, ``pinrate demo --help`` and a refused
 argument answer before numpy, Pinocchio or matplotlib load (issue 20); each subcommand's
-module (:mod:`.commands`, :mod:`.reporting`, :mod:`.teleop`) is imported by
-:func:`.entry.main` once the arguments are parsed. So the choices the parser offers are
-copies of the tuples that define them in the lower layers, which import numpy; the CLI's
-tests check every copy against its source.
+module (:mod:`.robot_list`, :mod:`.demo`, :mod:`.analyze`, :mod:`.paper_results`,
+:mod:`.teleop`) is imported by :func:`.entry.main` once the arguments are parsed. So the
+choices the parser offers are copies of the tuples that define them in the lower layers,
+which import numpy; the CLI's tests check every copy against its source.
 """
 
 from __future__ import annotations
@@ -36,8 +36,9 @@ DEMO_MAX_STEPS = 6000
 "stalled" (servo's stall rule)."""
 
 
-def robot_arguments(parser: argparse.ArgumentParser, tip_help: str, sensor_help: str) -> None:
-    """The robot and its frames, shared by ``analyze``, ``demo`` and ``teleop``."""
+def add_robot_arguments(parser: argparse.ArgumentParser, tip_help: str, sensor_help: str) -> None:
+    """The robot and its frames, shared by ``analyze``, ``demo`` and ``teleop`` (loaded by
+    :func:`.robot_arguments.load_robot`)."""
     parser.add_argument("robot", help="a name from `pinrate list` or a URDF path")
     parser.add_argument("--tip", help=tip_help)
     parser.add_argument("--sensor", help=sensor_help)
@@ -79,7 +80,7 @@ def build_parser(version: Callable[[], str]) -> argparse.ArgumentParser:
 
 
 def _analyze(analyze: argparse.ArgumentParser) -> None:
-    robot_arguments(analyze, "TCP frame", "frame the twist is expressed in")
+    add_robot_arguments(analyze, "TCP frame", "frame the twist is expressed in")
     analyze.add_argument("--arm", help="comma-separated arm joints (default: the automatic partition)")
     analyze.add_argument("--wrist", help="comma-separated wrist joints")
     analyze.add_argument("--linear", help="controlled linear axes, e.g. xy")
@@ -95,7 +96,7 @@ def _analyze(analyze: argparse.ArgumentParser) -> None:
 
 
 def _demo(demo: argparse.ArgumentParser) -> None:
-    robot_arguments(
+    add_robot_arguments(
         demo,
         "TCP frame (default: the name table's, or the chain's end)",
         "frame the twist is expressed in (default: the tip)",
@@ -133,7 +134,7 @@ def _demo(demo: argparse.ArgumentParser) -> None:
 
 
 def _teleop(teleop: argparse.ArgumentParser) -> None:
-    robot_arguments(
+    add_robot_arguments(
         teleop,
         "TCP frame (default: the name table's, or the chain's end)",
         "frame the commands are expressed in: the hand axes (default: the tip)",

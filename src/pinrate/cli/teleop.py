@@ -7,13 +7,12 @@ import argparse
 import contextlib
 import warnings
 import webbrowser
-from collections.abc import Callable
 
 from ..checks import check_output_folder
 from ..errors import InputError
 from ..teleop import Teleop
 from .arguments import warn
-from .commands import load_robot, start_configuration
+from .robot_arguments import load_robot, start_configuration
 
 MAX_RATE = 5000.0
 """Hz: the fastest control loop the console accepts (a step costs 40-60 µs in Python)."""
@@ -70,7 +69,3 @@ def run(args: argparse.Namespace) -> int:
         server.close()
         for path in server.saved:
             print(f"saved      {path}")
-
-
-COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {"teleop": run}
-"""The subcommand of this module, by name (:func:`.entry.main` runs it)."""

@@ -19,7 +19,7 @@ least c is under ``slow_threshold``; there, ``singularity=`` decides:
   Moore-Penrose inverse with singular values under ``singular_threshold`` · σ_1 cut. On
   Barker's arm this equals the 2x2 reduction (eq. 39-44) at θ3 = 0 for a command in M's
   range (M's null vector leaves θ1 alone), not for a command with an outward part, nor at
-  S2 ES + F5 = 0, where the null vector moves θ1 (:mod:`pinrate.papers.barker`);
+  S2 ES + F5 = 0, where the null vector moves θ1 (:mod:`pinrate.papers.barker_arm_rates`);
 * ``"freeze"`` (Barker's "variables held constant"): the joints that carry the lost
   direction (those with at least :data:`FREEZE_SHARE` of the largest entry of the weakest
   block's smallest right singular vector) hold still and the others serve the command, until

@@ -1,9 +1,9 @@
-"""The subcommands ``list`` and ``demo``, and what the others share: loading the robot the
-command line names, and ``--q0`` (``analyze`` and ``paper`` live in :mod:`.reporting`,
-``teleop`` in :mod:`.teleop`; the parser, which imports none of them, in :mod:`.parser`).
+"""``pinrate demo``: servo a robot from home (or ``--q0``) to one target or several, with the
+Meshcat view or headless, and a summary of each run: ρ along the path, what it rests on, and
+the coupling beside it (eq. 30, 49).
 
 Importing this module loads numpy and Pinocchio: :func:`.entry.main` does so once the
-arguments are parsed.
+arguments are parsed (meshcat only when a view is asked for).
 """
 
 from __future__ import annotations
@@ -12,12 +12,10 @@ import argparse
 import sys
 import time
 import warnings
-from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
 
-from .. import robots
 from ..checks import check_output_file
 from ..control.servo_loop import servo
 from ..control.trajectory import Trajectory
@@ -25,24 +23,10 @@ from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..kinematics.targets import nearby_target
-from ..robots import EXAMPLE_ROBOTS, ROBOT_NAMES, example_robot_data_share, load
 from ..solvers.error_map import THEOREM_ALGORITHMS
 from ..theorem.pointwise import coupling_along
 from .arguments import warn
-
-
-def list_robots(_: argparse.Namespace) -> int:
-    print("The papers' robots (pinrate.robots, urdf/):")
-    for name in ROBOT_NAMES:
-        summary_line = (getattr(robots, name).__doc__ or "").strip().splitlines()[0]
-        print(f"  {name:<16} {summary_line}")
-    available = example_robot_data_share() is not None
-    note = "" if available else "  (example-robot-data not installed)"
-    print(f"example-robot-data arms:{note}")
-    for entry in EXAMPLE_ROBOTS.values():
-        print(f"  {entry.name:<8} tip {entry.tip:<24} {entry.description}")
-    print("Any other URDF: pass its path.")
-    return 0
+from .robot_arguments import load_robot, start_configuration
 
 
 def radius_range(trajectory: Trajectory) -> str:
@@ -134,15 +118,8 @@ def _targets(args: argparse.Namespace, robot: Robot, partition: Partition, start
     return [nearby_target(robot, partition, args.seed + k, start=start)[1] for k in range(args.targets)]
 
 
-def load_robot(args: argparse.Namespace) -> Robot:
-    """The robot of ``args.robot``, ``--tip``, ``--sensor`` and ``--max-joints``; says which tip it chose."""
-    robot = load(args.robot, tip=args.tip, sensor=args.sensor, max_joints=args.max_joints)
-    if robot.tip_choice != "given":
-        print(f"tip        {robot.tip} ({robot.tip_choice}; --tip to choose another)")
-    return robot
-
-
 def demo(args: argparse.Namespace) -> int:
+    """``pinrate demo``: 0 when every target was reached, 1 otherwise."""
     record = None
     if args.record:
         if args.no_viewer:
@@ -209,21 +186,3 @@ def demo(args: argparse.Namespace) -> int:
     finally:
         if viewer is not None:
             viewer.close()
-
-
-def start_configuration(robot: Robot, values: list[float]) -> np.ndarray:
-    """--q0: one value per moving joint in ``robot.joint_names`` order (an angle for a
-    continuous joint), checked like any q."""
-    if len(values) != len(robot.joint_names):
-        raise InputError(
-            f"--q0 takes {len(robot.joint_names)} values, one per moving joint ({', '.join(robot.joint_names)}); "
-            f"got {len(values)}"
-        )
-    q = robot.neutral()[None, :]
-    for joint, value in zip(robot.joint_names, values, strict=True):
-        robot.set_joint_values(q, joint, np.array([value]))
-    return robot.check_q(q[0])
-
-
-COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {"list": list_robots, "demo": demo}
-"""The subcommands of this module, by name (:func:`.entry.main` runs them)."""

@@ -1,20 +1,19 @@
-"""The subcommands that write results up: ``analyze`` (where MCA1/2/3 converge, with region
-maps) and ``paper`` (every result of the two papers). Importing this module loads the
-analysis and matplotlib: only these two commands need them."""
+"""``pinrate analyze``: where MCA1/2/3 converge on one robot: the share of its work volume,
+region maps, and a parameter sweep of a papers' robot, written up as ``report.md`` and PNGs in
+``--out``. Importing this module loads the analysis and matplotlib: only this command and
+``paper`` need them."""
 
 from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Callable
 
 from .. import analysis, robots
 from ..checks import check_output_folder
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
-from ..papers import markdown, results
-from .commands import load_robot
+from .robot_arguments import load_robot
 
 
 def _partition_from_args(args: argparse.Namespace, robot: Robot) -> Partition:
@@ -75,13 +74,3 @@ def analyze(args: argparse.Namespace) -> int:
         f"({time.perf_counter() - started:.1f} s)"
     )
     return 0
-
-
-def paper(_: argparse.Namespace) -> int:
-    """``pinrate paper``: the papers' results recomputed, as a Markdown table."""
-    print(markdown(results()), end="")
-    return 0
-
-
-COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {"analyze": analyze, "paper": paper}
-"""The subcommands of this module, by name (:func:`.entry.main` runs them)."""

@@ -1,0 +1,40 @@
+"""The robot the command line names, shared by ``demo``, ``analyze`` and ``teleop``: ``ROBOT``
+with ``--tip``, ``--sensor`` and ``--max-joints`` loaded into a :class:`~pinrate.Robot`, and
+``--q0`` checked into a start configuration (the parser declares them, with nothing heavy
+loaded: :func:`.parser.add_robot_arguments`).
+
+Importing this module loads numpy and Pinocchio: the subcommands' modules import it, and
+:func:`.entry.main` imports those once the arguments are parsed.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ..errors import InputError
+from ..kinematics.manipulator import Robot
+from ..robots import load
+
+
+def load_robot(args: argparse.Namespace) -> Robot:
+    """The robot of ``args.robot``, ``--tip``, ``--sensor`` and ``--max-joints``; says which tip it chose."""
+    robot = load(args.robot, tip=args.tip, sensor=args.sensor, max_joints=args.max_joints)
+    if robot.tip_choice != "given":
+        print(f"tip        {robot.tip} ({robot.tip_choice}; --tip to choose another)")
+    return robot
+
+
+def start_configuration(robot: Robot, values: list[float]) -> np.ndarray:
+    """--q0: one value per moving joint in ``robot.joint_names`` order (an angle for a
+    continuous joint), checked like any q."""
+    if len(values) != len(robot.joint_names):
+        raise InputError(
+            f"--q0 takes {len(robot.joint_names)} values, one per moving joint ({', '.join(robot.joint_names)}); "
+            f"got {len(values)}"
+        )
+    q = robot.neutral()[None, :]
+    for joint, value in zip(robot.joint_names, values, strict=True):
+        robot.set_joint_values(q, joint, np.array([value]))
+    return robot.check_q(q[0])
