@@ -100,3 +100,28 @@ def test_statuses_rank_as_the_contract_says() -> None:
     assert most_severe(Status.RATE_LIMITED, Status.FROZEN, Status.OK) is Status.FROZEN
     assert most_severe() is Status.OK
     assert isinstance(Status.OK, str)
+
+
+def test_the_compiled_allow_list_names_every_option_and_fails_closed(monkeypatch) -> None:
+    # Every Controller option has an entry: a new option cannot be ignored by the core unseen.
+    import inspect
+
+    from pinrate.control import controller as controller_module
+
+    assert set(controller_module.COMPILED_COVERAGE) == set(inspect.signature(pinrate.Controller).parameters)
+    robot = pinrate.load("ur5")
+    coverage = dict(controller_module.COMPILED_COVERAGE)
+    del coverage["wrist"]
+    monkeypatch.setattr(controller_module, "COMPILED_COVERAGE", coverage)
+    reason = pinrate.Controller(robot).compiled_reason()
+    assert reason is not None and "'wrist'" in reason
+    assert pinrate.Controller(robot).compiled() is None
+
+
+def test_every_strategy_is_a_module_behind_one_protocol() -> None:
+    from pinrate.control import singularity
+
+    assert tuple(singularity.RULES) == singularity.STRATEGIES
+    for name, rule in singularity.RULES.items():
+        assert rule.__name__ == f"pinrate.control.singularity.{name}"
+        assert isinstance(rule.decelerates, bool) and callable(rule.near)

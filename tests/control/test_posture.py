@@ -29,12 +29,13 @@ def test_the_twist_is_unchanged_and_the_objective_improves(name: str) -> None:
             continue  # near a singular block: the task is off, or the step decelerates
         checked += 1
         np.testing.assert_allclose(robot.jacobian(q) @ step.joint_rates, twist, atol=1e-9)
-        before = posture.objective(with_posture._posture, q)
-        gradient = posture.gradient(with_posture._posture, q)
-        columns = with_posture._posture.q_indices  # 1-DOF joints: q index = v index here
+        before = posture.objective(with_posture.posture.joints, q)
+        gradient = posture.gradient(with_posture.posture.joints, q)
+        columns = with_posture.posture.joints.q_indices  # 1-DOF joints: q index = v index here
         # to first order, the step changes H by ∇H · q̇ dt: less than without the task
         assert gradient @ step.joint_rates[columns] < gradient @ plain.joint_rates[columns]
-        assert posture.objective(with_posture._posture, step.q) < posture.objective(with_posture._posture, plain.q)
+        joints = with_posture.posture.joints
+        assert posture.objective(joints, step.q) < posture.objective(joints, plain.q)
         assert before > 0.0
     assert checked >= 10
 
@@ -42,7 +43,7 @@ def test_the_twist_is_unchanged_and_the_objective_improves(name: str) -> None:
 def test_the_gradient_is_the_objectives_derivative() -> None:
     robot = pinrate.load("panda")
     controller = Controller(robot, posture="home")
-    joints = controller._posture
+    joints = controller.posture.joints
     lower, upper = robot.position_limits()
     for q in robot.sample_configurations(10, 6):
         q[0] = lower[0] + 0.02 * (upper[0] - lower[0])  # inside the limit margin
@@ -64,10 +65,10 @@ def test_holding_the_hand_still_moves_a_joint_off_its_limit() -> None:
     q[6] = upper - 0.01
     start = robot.pose(q)
     hold = PoseGoal.of(start, gain=5.0)  # closed loop: Euler steps of the null motion drift the hand
-    objective = [posture.objective(controller._posture, q)]
+    objective = [posture.objective(controller.posture.joints, q)]
     for _ in range(200):
         q = controller.step(q, hold).q
-        objective.append(posture.objective(controller._posture, q))
+        objective.append(posture.objective(controller.posture.joints, q))
     assert upper - q[6] > 0.3  # well off the limit
     assert all(after <= before + 1e-12 for before, after in itertools.pairwise(objective))
     np.testing.assert_allclose(robot.pose(q), start, atol=1e-4)  # the hand held

@@ -266,3 +266,43 @@ def test_pose_error_is_the_definition_in_sensor_axes(seed: int) -> None:
     R_tip = tip.rotation
     np.testing.assert_allclose(at_tip[:3], R_tip.T @ (target.translation - tip.translation), atol=1e-12)
     np.testing.assert_allclose(at_tip[3:], tip.rotation.T @ pin.log3(target.rotation @ tip.rotation.T), atol=1e-9)
+
+
+def test_servo_takes_every_controller_option(ur5: pinrate.Robot) -> None:
+    # Each option reaches the Controller the servo runs: checked on what the option does, not
+    # on the controller object. collision=True: a drive into the UR5's own base halts before
+    # contact ("collision"), where the same run without it goes on.
+    import inspect
+
+    from pinrate.control.servo_loop import CONTROLLER_OPTIONS
+
+    assert set(CONTROLLER_OPTIONS) == set(inspect.signature(pinrate.Controller).parameters) - {"robot"}
+    q0 = ur5.home()
+    target = ur5.pose(q0)
+    target[:3, 3] = [0.0, 0.0, 0.05]  # inside the base
+    monitored = pinrate.servo(ur5, q0, target, collision=True, max_steps=3000)
+    assert monitored.reason.startswith("collision")
+    plain = pinrate.servo(ur5, q0, target, max_steps=3000)
+    assert not plain.reason.startswith("collision")
+    # acceleration limits: the first step's rates are at most a * dt
+    limited = pinrate.servo(ur5, q0, target, acceleration_limits=1.0, max_steps=5)
+    first = np.abs(np.diff(limited.q[:2], axis=0)[0]) / 0.01
+    assert first.max() <= 1.0 * 0.01 + 1e-12
+
+
+def test_servo_with_a_controller_and_bad_options(ur5: pinrate.Robot) -> None:
+    controller = pinrate.Controller(ur5, algorithm="mca2", dt=0.02, velocity_limits=math.inf)
+    q0 = ur5.home()
+    target = ur5.pose(q0)
+    target[:3, 3] += [0.05, 0.0, 0.0]
+    given = pinrate.servo(ur5, q0, target, controller=controller)
+    built = pinrate.servo(ur5, q0, target, algorithm="mca2", dt=0.02)
+    np.testing.assert_array_equal(given.q, built.q)
+    with pytest.raises(pinrate.InputError, match="drop algorithm"):
+        pinrate.servo(ur5, q0, target, controller=controller, algorithm="exact")
+    with pytest.raises(pinrate.InputError, match="drop collision"):
+        pinrate.servo(ur5, q0, target, controller=controller, collision=True)
+    with pytest.raises(pinrate.InputError, match="another Robot"):
+        pinrate.servo(pinrate.load("ur5"), q0, target, controller=controller)
+    with pytest.raises(pinrate.InputError, match=r"no option 'colision'.*collision"):
+        pinrate.servo(ur5, q0, target, colision=True)

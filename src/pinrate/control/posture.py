@@ -22,7 +22,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..errors import InputError
 from ..solvers.conditioning import truncated_pinv
+from .context import StepContext
+from .observation import Observation
 
 LIMIT_MARGIN = 0.1
 """μ: the share of a joint's range near each limit where the limit term acts."""
@@ -89,4 +92,59 @@ def null_space_motion(jacobian: np.ndarray, descent: np.ndarray, threshold: floa
     return descent - truncated_pinv(jacobian, threshold) @ (jacobian @ descent)
 
 
-__all__ = ["LIMIT_MARGIN", "PostureJoints", "gradient", "null_space_motion", "objective", "posture_joints"]
+class PostureTask:
+    """The secondary task of a controller (``Controller(posture=..., posture_gain=...)``).
+
+    Args:
+        context: the controller's fixed settings.
+        posture: ``"home"`` or a configuration (nq,): the preferred posture p.
+        gain: k (1/s).
+
+    Raises:
+        InputError: a posture that is neither.
+    """
+
+    def __init__(self, context: StepContext, posture: object, gain: float) -> None:
+        robot = context.robot
+        if isinstance(posture, str):
+            if posture != "home":
+                raise InputError(f"posture must be None, 'home' or a configuration ({robot.nq},), not {posture!r}")
+            preferred = robot.home()
+        else:
+            preferred = robot.check_q(posture)
+        model = robot.model
+        positions, q_indices = [], []
+        for position, name in enumerate(context.names):
+            joint = model.joints[robot.joint_id(name)]
+            if joint.nq == 1:
+                positions.append(position)
+                q_indices.append(joint.idx_q)
+        lower, upper = (np.array(bounds)[q_indices] for bounds in robot.position_limits())
+        self.context = context
+        self.gain = gain
+        self.joints = posture_joints(positions, q_indices, lower, upper, preferred[q_indices])
+        """The joints it moves, their limits and preferred values."""
+
+    def null_motion(self, observation: Observation, left_out: frozenset[str]) -> np.ndarray:
+        """Rates (nv,): -k ∇H projected onto the null space of the partition's J without the
+        ``left_out`` joints (the module docstring's equation)."""
+        context = self.context
+        index = context.index
+        descent = np.zeros(index.columns.size)
+        descent[self.joints.positions] = -self.gain * gradient(self.joints, observation.q)
+        kept = [position for position, name in enumerate(context.names) if name not in left_out]
+        scaled = context.reduced(observation.jacobian)[:, kept] * context.row_scale_column
+        rates = np.zeros(context.robot.nv)
+        rates[index.columns[kept]] = null_space_motion(scaled, descent[kept], context.singular_threshold)
+        return rates
+
+
+__all__ = [
+    "LIMIT_MARGIN",
+    "PostureJoints",
+    "PostureTask",
+    "gradient",
+    "null_space_motion",
+    "objective",
+    "posture_joints",
+]

@@ -42,6 +42,7 @@ go on serving the error (a target the held joint was needed for then ends as "st
 
 from __future__ import annotations
 
+import inspect
 import math
 from typing import Any
 
@@ -56,6 +57,9 @@ from .commands import PoseGoal
 from .controller import MAX_ANGULAR_SPEED, MAX_LINEAR_SPEED, Controller, Observation, error_norms
 from .status import Status, most_severe
 from .trajectory import Trajectory
+
+CONTROLLER_OPTIONS = tuple(name for name in inspect.signature(Controller).parameters if name != "robot")
+"""Every keyword option of :class:`Controller`, which :func:`servo` passes on."""
 
 DIVERGENCE_FACTOR = 3.0
 """Stop as diverging once position + orientation error exceeds this times its minimum so far."""
@@ -105,6 +109,8 @@ def servo(
     velocity_limits: object = math.inf,
     singularity: str = "decelerate",
     wrist: str = "split",
+    controller: Controller | None = None,
+    **controller_options: Any,
 ) -> Trajectory:
     """Servo the tip from q0 to ``target`` (4x4 pose in the world, or pinocchio.SE3).
 
@@ -116,18 +122,44 @@ def servo(
     limits while the others go on (:class:`Controller`). ``velocity_limits``, ``singularity``
     and ``wrist`` as for :class:`Controller`: the default velocity limits, none, keep the
     papers' simulations as they were; None takes the URDF's.
+
+    Every other :class:`Controller` option is taken by keyword (``collision=True``,
+    ``acceleration_limits=2.0``, ``posture="home"``, ...), or a ``controller`` built on this
+    ``robot`` is used as it is (then no controller option may be given here; its state, such
+    as acceleration-limited rates, carries over from earlier steps). An unknown option is an
+    InputError listing the valid ones.
     """
-    controller = Controller(
-        robot,
-        algorithm=algorithm,
-        partition=partition,
-        dt=dt,
-        max_linear_speed=max_linear_speed,
-        max_angular_speed=max_angular_speed,
-        velocity_limits=velocity_limits,
-        singularity=singularity,
-        wrist=wrist,
-    )
+    explicit: dict[str, Any] = {
+        "algorithm": algorithm,
+        "partition": partition,
+        "dt": dt,
+        "max_linear_speed": max_linear_speed,
+        "max_angular_speed": max_angular_speed,
+        "velocity_limits": velocity_limits,
+        "singularity": singularity,
+        "wrist": wrist,
+    }
+    if controller is None:
+        unknown = sorted(set(controller_options) - set(CONTROLLER_OPTIONS))
+        if unknown:
+            raise InputError(
+                f"servo() has no option {', '.join(map(repr, unknown))}; its own are gain, max_steps, tol, "
+                f"stall_time, controller, and the Controller's: {', '.join(CONTROLLER_OPTIONS)}"
+            )
+        controller = Controller(robot, **explicit, **controller_options)
+    else:
+        if not isinstance(controller, Controller):
+            raise InputError(f"controller must be a pinrate.Controller, not {type(controller).__name__}")
+        if controller.robot is not robot:
+            raise InputError("the controller was built for another Robot object: servo it on that one")
+        given = sorted(
+            [*controller_options, *(name for name, value in explicit.items() if value is not SERVO_DEFAULTS[name])]
+        )
+        if given:
+            raise InputError(
+                f"servo(controller=...) takes its options from the controller: drop {', '.join(given)} "
+                "(or build the controller with them)"
+            )
     q = robot.check_q(q0)
     goal = PoseGoal.of(target, gain)
     tol = check_positive(tol, "tol")
@@ -144,6 +176,12 @@ def servo(
     else:
         run.compiled(core)
     return run.trajectory()
+
+
+SERVO_DEFAULTS = {
+    name: parameter.default for name, parameter in inspect.signature(servo).parameters.items() if name != "robot"
+}
+"""servo()'s own defaults of the Controller options it names (compared by identity)."""
 
 
 class _Log:
