@@ -106,7 +106,7 @@ def test_the_compiled_allow_list_names_every_option_and_fails_closed(monkeypatch
     # Every Controller option has an entry: a new option cannot be ignored by the core unseen.
     import inspect
 
-    from pinrate.control import controller as controller_module
+    from pinrate.control import compiled_twin as controller_module
 
     assert set(controller_module.COMPILED_COVERAGE) == set(inspect.signature(pinrate.Controller).parameters)
     robot = pinrate.load("ur5")

@@ -229,4 +229,28 @@ def _to_convex_hull(geometry_object: pin.GeometryObject) -> None:
         geometry_object.geometry = geometry.convex
 
 
-__all__ = ["HALT_SCALE", "SAFETY_DISTANCE", "STOP_DISTANCE", "CollisionMonitor", "CollisionVerdict", "Proximity"]
+def monitor_for(robot: Robot, collision: object) -> CollisionMonitor | None:
+    """The monitor ``Controller(collision=...)`` asks for on ``robot``: None for False (or
+    None) and where the robot has no collision geometry; a new one for True; the given one,
+    built on this very Robot. InputError otherwise."""
+    if isinstance(collision, CollisionMonitor):
+        if collision.robot is not robot:
+            raise InputError("the CollisionMonitor was built for another Robot object; build it on this one")
+        return collision if collision.active else None
+    if collision is False or collision is None:
+        return None
+    if collision is True:
+        monitor = CollisionMonitor(robot)
+        return monitor if monitor.active else None
+    raise InputError(f"collision must be True, False or a CollisionMonitor, not {collision!r}")
+
+
+__all__ = [
+    "HALT_SCALE",
+    "SAFETY_DISTANCE",
+    "STOP_DISTANCE",
+    "CollisionMonitor",
+    "CollisionVerdict",
+    "Proximity",
+    "monitor_for",
+]

@@ -36,16 +36,16 @@ from collections.abc import Callable
 import numpy as np
 
 from ..checks import check_positive, check_vector
-from ..compiled import CoreServo, ServoSettings, backend, core_kinematics, core_servo
-from ..errors import InputError, SingularBlockError, UnsupportedByCoreError
+from ..compiled import CoreServo
+from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
 from ..kinematics.spatial import pose_error, saturate
 from ..solvers import closed_form
 from ..solvers.conditioning import row_scale
-from ..solvers.reference import DLS_DAMPING, EXACT_RCOND
 from ..solvers.registry import check_algorithm
-from .collision import CollisionMonitor
+from . import compiled_twin
+from .collision import monitor_for
 from .commands import JointJog, PoseGoal, Uncoupled, joint_rate_vector
 from .context import StepContext
 from .elbow import Elbow
@@ -56,7 +56,7 @@ from .robot_facts import Limit, robot_facts
 from .singular_region import Conditioning, check_strategy, check_thresholds, measured_blocks
 from .singularity import RULES, SINGULAR_THRESHOLD, SLOW_THRESHOLD, STRATEGIES, WRIST_STRATEGIES, Plan, plan_step
 from .singularity.auxiliary_elbow import Auxiliary, AuxiliaryElbow
-from .singularity.decelerate import WATCH_FACTOR, WATCHED_STEP, decelerate, watched
+from .singularity.decelerate import decelerate, watched
 from .singularity.plan import solve_planned
 from .status import Status, ranked
 from .uncoupled import WristCentre
@@ -158,7 +158,8 @@ class Controller:
             raise InputError(f"position_limits must be True or False, not {position_limits!r}")
         self.position_limits = position_limits
         facts = robot_facts(robot, self.partition)
-        self._limits = facts.limits
+        self.joint_limits = facts.limits
+        """Every 1-DOF joint's position limits (:class:`~.robot_facts.Limit`)."""
         self.velocity_limits = (
             facts.urdf_velocity_limits.copy()
             if velocity_limits is None
@@ -167,7 +168,7 @@ class Controller:
         self.acceleration_limits = (
             None if acceleration_limits is None else per_joint(acceleration_limits, "acceleration_limits", robot)
         )
-        self.collision = self._collision_monitor(collision)
+        self.collision = monitor_for(robot, collision)
         """The self-collision monitor, or None."""
         self.characteristic_length = facts.characteristic_length
         """L (m): J's linear rows are divided by it before J is measured or pseudo-inverted."""
@@ -195,9 +196,11 @@ class Controller:
         )
         """What the step's stages read (:class:`~.context.StepContext`)."""
         self.joggable: tuple[str, ...] = facts.joggable
-        self._rule = RULES[self.singularity]
+        self.rule = RULES[self.singularity]
+        """The singularity strategy's module (:class:`~.singularity.plan.Rule`)."""
         self._positions = PositionLimits(facts.limits, self.dt, position_limits)
-        self._velocities = VelocityLimits(self.velocity_limits)
+        self.rate_limits = VelocityLimits(self.velocity_limits)
+        """The velocity limits' stage (:class:`~.limits.velocity.VelocityLimits`)."""
         self._accelerations = (
             None
             if self.acceleration_limits is None
@@ -228,90 +231,19 @@ class Controller:
         """The compiled twin of this controller (:mod:`pinrate.compiled`) with its settings as
         they are now; None where the Python path is chosen or the configuration is one the
         core does not cover (:meth:`compiled_reason` says which)."""
-        if self.compiled_reason() is not None:
-            return None
-        # Everything _compiled_settings reads: a servo call builds a controller afresh, and the
-        # same settings come back.
-        key = (
-            self.partition,
-            self.algorithm,
-            self.dt,
-            self.max_linear_speed,
-            self.max_angular_speed,
-            self.slow_threshold,
-            self.singularity,
-            self.position_limits,
-            self.velocity_limits.tobytes(),
-            self._limits,
-            self.characteristic_length,
-            self.context.square_j,
-            tuple(self.context.ranks.values()),
-        )
-        try:
-            return core_servo(self.robot, key, self._compiled_settings)
-        except UnsupportedByCoreError:
-            return None
+        return compiled_twin.twin(self, _OPTIONS)
 
     def compiled_reason(self) -> str | None:
         """Why this controller's loops run on Python though the core may be there (None when
         nothing in the configuration stops the core): the core's reason, or the first option
-        :data:`COMPILED_COVERAGE` does not cover at its value. An option missing from that
-        table is not covered (fails closed)."""
-        try:
-            if core_kinematics(self.robot) is None:
-                return backend().reason
-        except UnsupportedByCoreError as unsupported:
-            return str(unsupported)
-        for option in _OPTIONS:
-            if option not in COMPILED_COVERAGE:
-                return f"the option {option!r} is not known to the compiled core: the Python path runs"
-        for covered, reason in COMPILED_COVERAGE.values():
-            if covered is not None and not covered(self):
-                return reason
-        return None
-
-    def _compiled_settings(self) -> ServoSettings:
-        index = self.index
-        return ServoSettings(
-            rows=tuple(index.rows.tolist()),
-            columns=tuple(index.columns.tolist()),
-            m=index.m,
-            n_arm=int(index.arm_columns.size),
-            algorithm=self.algorithm,
-            measured=self.context.measured,
-            row_scale=tuple(self.context.row_scale.tolist()),
-            slow_threshold=self.slow_threshold,
-            watch=self._rule.decelerates,
-            watch_factor=WATCH_FACTOR,
-            watched_step=WATCHED_STEP,
-            max_linear_speed=self.max_linear_speed,
-            max_angular_speed=self.max_angular_speed,
-            dt=self.dt,
-            position_limits=self.position_limits,
-            limits=tuple((limit.q_index, limit.velocity, limit.lower, limit.upper) for limit in self._limits),
-            rate_limits=tuple(self._velocities.rows),
-            exact_rcond=EXACT_RCOND,
-            dls_damping=DLS_DAMPING,
-            small=index.small,
-            ranks=(self.context.ranks["J"], self.context.ranks["A"], self.context.ranks["W"]),
-        )
+        :data:`~.compiled_twin.COMPILED_COVERAGE` does not cover at its value. An option
+        missing from that table is not covered (fails closed)."""
+        return compiled_twin.reason(self, _OPTIONS)
 
     def position_limit(self, number: int) -> Limit:
         """The ``number``-th position limit the controller keeps (the compiled core names a
         clamped joint by it)."""
-        return self._limits[number]
-
-    def _collision_monitor(self, collision: object) -> CollisionMonitor | None:
-        if isinstance(collision, CollisionMonitor):
-            if collision.robot is not self.robot:
-                raise InputError("the CollisionMonitor was built for another Robot object; build it on this one")
-            return collision if collision.active else None
-        if collision is False or collision is None:
-            return None
-        if collision is True:
-            monitor = CollisionMonitor(self.robot)
-            return monitor if monitor.active else None
-        raise InputError(f"collision must be True, False or a CollisionMonitor, not {collision!r}")
+        return self.joint_limits[number]
 
     def reset(self) -> None:
         """Forget what earlier steps left: the rates applied last (an acceleration-limited
@@ -395,7 +327,7 @@ class Controller:
         bound = self.context.conditioning_bound(observation)
         auxiliary = self.auxiliary.plan(observation, twist) if self.auxiliary is not None else None
         plan = (
-            plan_step(self.context, self._rule, self.wrist, observation, twist)
+            plan_step(self.context, self.rule, self.wrist, observation, twist)
             if auxiliary is None and bound < self.slow_threshold
             else None
         )
@@ -407,7 +339,7 @@ class Controller:
             return self._halt(observation, twist, str(singular))
         judged = (
             watched(self.context, observation, plan, bound, rates)
-            if auxiliary is None and self._rule.decelerates
+            if auxiliary is None and self.rule.decelerates
             else None
         )
         if judged is not None:
@@ -450,7 +382,7 @@ class Controller:
         def with_posture(left_out: frozenset[str]) -> np.ndarray:
             rates = context.solve_without(observation, twist, left_out)
             null = posture.null_motion(observation, left_out)
-            return rates + self._velocities.room(rates, null) * null
+            return rates + self.rate_limits.room(rates, null) * null
 
         return with_posture, ()
 
@@ -493,7 +425,7 @@ class Controller:
     ) -> Step:
         """The end of every step: velocity limits (one scale factor), acceleration limits,
         self-collision, integration over dt, the clamp to the position limits, the status."""
-        rates = self._velocities.apply(rates, statuses, details)
+        rates = self.rate_limits.apply(rates, statuses, details)
         if self._accelerations is not None:
             rates = self._accelerations.apply(observation.q, rates, frozen, statuses, details)
         if self.collision is not None:
@@ -526,38 +458,10 @@ class Controller:
         return Step(observation.q.copy(), np.zeros(self.robot.nv), status, (), twist, observation, detail, (status,))
 
 
-Coverage = tuple[Callable[[Controller], bool] | None, str]
-
-COMPILED_COVERAGE: dict[str, Coverage] = {
-    # (covered at this controller's value, or None: at every value; why not), first reason first
-    "singularity": (lambda c: c.auxiliary is None, "auxiliary elbow control runs on the Python path"),
-    "posture": (lambda c: c.posture is None, "a posture task runs on the Python path"),
-    "acceleration_limits": (lambda c: c.acceleration_limits is None, "acceleration limits run on the Python path"),
-    "collision": (lambda c: c.collision is None, "the collision monitor runs on the Python path"),
-    "partition": (
-        lambda c: c.index.small or c.index.pseudo_g,
-        "a tall A or a wide W (rho is then the error map's) runs on the Python path",
-    ),
-    # Read by the core (ServoSettings), or acting only in steps it hands back to Python (the
-    # singular region, a joint passing a limit) or through an option above.
-    "robot": (None, ""),
-    "algorithm": (None, ""),
-    "dt": (None, ""),
-    "wrist": (None, ""),
-    "velocity_limits": (None, ""),
-    "position_limits": (None, ""),
-    "singular_threshold": (None, ""),
-    "slow_threshold": (None, ""),
-    "max_linear_speed": (None, ""),
-    "max_angular_speed": (None, ""),
-    "elbow_region": (None, ""),
-    "posture_gain": (None, ""),
-}
-"""The compiled core's allow-list: every ``Controller`` option with whether the core covers it
-at a controller's value. A test keeps its keys equal to ``Controller``'s parameters; an option
-added without an entry keeps its controllers on Python (:meth:`Controller.compiled_reason`)."""
-
 _OPTIONS = tuple(inspect.signature(Controller).parameters)
+"""The Controller's parameters, whose coverage by the compiled core is looked up by name."""
+
+COMPILED_COVERAGE = compiled_twin.COMPILED_COVERAGE
 
 
 __all__ = [
