@@ -261,3 +261,18 @@ def test_a_robot_with_no_moving_joint_is_a_load_error() -> None:
 def test_a_tip_fixed_to_the_world_is_a_load_error_naming_it(tip: str) -> None:
     with pytest.raises(pinrate.LoadError, match=rf"tip frame '{tip}' has no moving joint between it and the world"):
         pinrate.load("ur5", tip=tip)
+
+
+def test_generic_configurations_are_one_deterministic_set_within_the_limits() -> None:
+    from pinrate.kinematics.manipulator import GENERIC_SAMPLES
+
+    robot = pinrate.load("panda")
+    configurations = robot.generic_configurations()
+    assert configurations.shape == (GENERIC_SAMPLES + 1, robot.nq)
+    np.testing.assert_array_equal(configurations[0], robot.neutral())
+    np.testing.assert_array_equal(configurations, robot.generic_configurations())  # seeded
+    lower, upper = robot.position_limits()
+    assert ((configurations >= lower) & (configurations <= upper)).all()
+    only = robot.generic_configurations(["panda_joint2"])
+    moved = np.flatnonzero((only != robot.neutral()).any(axis=0))
+    assert moved.tolist() == [robot.model.joints[robot.joint_id("panda_joint2")].idx_q]

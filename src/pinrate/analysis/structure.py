@@ -53,13 +53,18 @@ class BlockStructure:
 
 
 def block_structure(
-    robot: Robot, *, partition: Partition | None = None, samples: int = 64, rng: int = 11
+    robot: Robot, *, partition: Partition | None = None, samples: int | None = None, rng: int | None = None
 ) -> BlockStructure:
-    """Zero patterns of A, B, U, W over ``samples`` random configurations (plus home)."""
+    """Zero patterns of A, B, U, W over home and :meth:`Robot.generic_configurations` of the
+    partition's joints (the set every test of what holds almost everywhere uses), or over
+    ``samples`` configurations drawn with ``rng`` when given."""
     partition = partition_for(robot, partition)
-    configurations = np.vstack(
-        [robot.home()[None, :], robot.sample_configurations(samples, rng, joints=partition.joints)]
+    drawn = (
+        robot.generic_configurations(partition.joints)
+        if samples is None
+        else robot.sample_configurations(samples, rng, joints=partition.joints)
     )
+    configurations = np.vstack([robot.home()[None, :], drawn])
     magnitude = [np.abs(block) for block in partition.blocks(robot, robot.jacobian_unchecked(configurations[0]))]
     for q in configurations[1:]:
         current = partition.blocks(robot, robot.jacobian_unchecked(q))

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, choices_hint
+from ..kinematics.partition import split_blocks
 from ..solvers.conditioning import inverse_condition
 
 WRIST_STRATEGIES = ("split", "hold_first", "last_then_first")
@@ -79,12 +80,12 @@ def measured_blocks(algorithm: str) -> tuple[str, ...]:
 
 
 def block_of(name: str, J: np.ndarray, m: int, n_arm: int, scale: np.ndarray) -> np.ndarray:
-    """Block ``name`` of J (m + k, n) in partition order: "A", "W", or "J" with its rows scaled."""
-    if name == "A":
-        return J[:m, :n_arm]
-    if name == "W":
-        return J[m:, n_arm:]
-    return J * scale[:, None]
+    """Block ``name`` of J (m + k, n) in partition order: "A" or "W"
+    (:func:`~pinrate.kinematics.partition.split_blocks`), or "J" with its rows scaled."""
+    if name == "J":
+        return J * scale[:, None]
+    A, _, _, W = split_blocks(J, m, n_arm)
+    return A if name == "A" else W
 
 
 @dataclass(frozen=True)

@@ -81,9 +81,6 @@ class HomeQuality:
 Ranks = tuple[int, int, int]
 """Generic ranks of the partition's (J, A, W): their largest rank over a sample of configurations."""
 
-GENERIC_RANK_SAMPLES = 8
-"""Configurations drawn (seeded) to find the generic ranks."""
-
 RANK_TOLERANCE = 1e-9
 """A singular value below this fraction of the largest does not count towards a rank."""
 
@@ -93,7 +90,7 @@ def generic_ranks(robot: Robot, partition: Partition) -> Ranks:
     direction (Stretch's four collinear telescoping joints, a 5-DOF arm's six rows) is judged
     on the directions it can span."""
     ranks = [0, 0, 0]
-    for q in robot.sample_configurations(GENERIC_RANK_SAMPLES, 0, joints=partition.joints):
+    for q in robot.generic_configurations(partition.joints):
         for i, values in enumerate(_singular_values(robot, partition, q)):
             if values.size:
                 ranks[i] = max(ranks[i], int(np.sum(values > RANK_TOLERANCE * values.max())))

@@ -35,6 +35,13 @@ UNIT_TOLERANCE = 1e-6
 """How far from 1 the norm of a continuous joint's (cos, sin) pair (or a quaternion) in q may be."""
 
 
+GENERIC_SAMPLES = 32
+"""Configurations drawn for :meth:`Robot.generic_configurations` (besides neutral)."""
+
+GENERIC_SEED = 20260101
+"""Their seed: the tests of what holds almost everywhere are deterministic."""
+
+
 @dataclass(frozen=True)
 class RobotSpec:
     """What a worker needs to rebuild a robot's kinematics: URDF text, tip, sensor, name
@@ -202,6 +209,14 @@ class Robot:
             if self.model.joints[self.joint_id(joint)].nv == 1:
                 self.set_joint_values(samples, joint, generator.uniform(*self.joint_range(joint), count))
         return samples
+
+    def generic_configurations(self, joints: Sequence[str] | None = None) -> np.ndarray:
+        """Where pinrate tests what holds at almost every configuration (a Jacobian entry or
+        row that is zero everywhere, a block's generic rank): neutral, then
+        :data:`GENERIC_SAMPLES` configurations drawn with the fixed seed :data:`GENERIC_SEED`
+        within the limits of ``joints`` (all moving joints by default; the others at neutral).
+        One set for every such test, so they agree."""
+        return np.vstack([self.neutral(), self.sample_configurations(GENERIC_SAMPLES, GENERIC_SEED, joints=joints)])
 
     def joint_limits(self, joint: str) -> tuple[float, float] | None:
         """The finite position limits of a 1-DOF joint with one coordinate, else None

@@ -22,7 +22,6 @@ from .manipulator import Robot, check_robot
 
 _AXES = "xyz"
 _ZERO_TOL = 1e-9  # a Jacobian entry counts as zero below this times (1 + max |J|)
-_AUTO_SAMPLES = 32  # random configurations Partition.auto inspects (plus neutral and home)
 
 # Per-robot caches kept here, not on the robot: they go when the robot goes.
 _INDEX_CACHE: weakref.WeakKeyDictionary[Robot, dict[Partition, PartitionIndex]] = weakref.WeakKeyDictionary()
@@ -232,7 +231,7 @@ class Partition:
         cached = _AUTO_CACHE.get(check_robot(robot))
         if cached is not None:
             return cached
-        samples = np.vstack([robot.neutral(), robot.home(), robot.sample_configurations(_AUTO_SAMPLES, rng=20260101)])
+        samples = np.vstack([robot.generic_configurations(), robot.home()])
         magnitude = np.zeros((6, robot.nv))
         for q in samples:
             magnitude = np.maximum(magnitude, np.abs(robot.jacobian(q)))
