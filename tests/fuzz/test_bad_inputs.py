@@ -20,7 +20,7 @@ from pinrate.solvers.singular import hadamard_ratio
 from pinrate.theorem import parallel
 from pinrate.theorem.pointwise import convergence_from_blocks
 from pinrate.theorem.sampling import spectral_radius_at, wilson_interval
-from pinrate.viewer.scene import path_colours
+from pinrate.viewer.markers import path_colours
 
 
 @pytest.fixture(scope="module")

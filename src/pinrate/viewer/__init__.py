@@ -2,7 +2,8 @@
 that imports meshcat)."""
 
 from ..errors import ViewerError
-from .scene import ROOT, Viewer, path_colours, triad
+from .markers import path_colours, triad
+from .scene import ROOT, Viewer
 from .server import MeshcatServer
 
 __all__ = ["ROOT", "MeshcatServer", "Viewer", "ViewerError", "path_colours", "triad"]

@@ -26,7 +26,6 @@ import io
 import math
 import os
 import time
-import warnings
 import webbrowser
 from collections.abc import Sequence
 from pathlib import Path
@@ -35,59 +34,18 @@ import meshcat
 import meshcat.geometry as g
 import numpy as np
 import pinocchio as pin
-from pinocchio.visualize import MeshcatVisualizer
 
 from ..checks import as_pose, check_output_file, check_positive, check_vector
 from ..control.trajectory import Trajectory
 from ..errors import InputError
 from ..kinematics.manipulator import Robot, check_robot
-from .collada import one_material_per_mesh
+from .markers import AXIS_COLOURS, TARGET_COLOUR, arrow_parts, path_colours, triad
 from .offline import Animation, SceneCommands
 from .server import MeshcatServer, check_reachable
 from .skeleton import Skeleton
+from .visualizer import RobotVisualizer
 
 ROOT = "pinrate"
-CONVERGING_COLOUR = 0x2CA02C  # ρ < 1
-DIVERGING_COLOUR = 0xD62728  # ρ >= 1
-TARGET_COLOUR = 0xFF7F0E
-
-
-def triad(length: float = 0.1, width: float = 3.0, opacity: float = 1.0) -> tuple[g.LineSegments]:
-    """A frame triad: x red, y green, z blue."""
-    vertices = np.array([[0, length, 0, 0, 0, 0], [0, 0, 0, length, 0, 0], [0, 0, 0, 0, 0, length]], dtype=np.float32)
-    colours = np.array([[1, 1, 0, 0, 0, 0], [0, 0.6, 1, 0.6, 0, 0.6], [0, 0, 0, 0, 1, 1]], dtype=np.float32)
-    return (
-        g.LineSegments(
-            g.PointsGeometry(vertices, colours),
-            g.LineBasicMaterial(vertexColors=True, linewidth=width, opacity=opacity),
-        ),
-    )
-
-
-AXIS_COLOURS = (0xD62728, 0x2CA02C, 0x1F77B4)
-"""x red, y green, z blue: the colours of every drawn frame's axes."""
-
-
-def arrow_parts(axis: int, length: float, radius: float) -> list[tuple[str, g.Cylinder, np.ndarray]]:
-    """(name, geometry, transform in the frame) of a shaft and a cone head along ``axis``
-    (meshcat's cylinders stand along their own y axis, centred on their origin)."""
-    turn = np.eye(4)
-    if axis == 0:  # y -> x: a quarter turn about -z
-        turn[:3, :3] = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]
-    elif axis == 2:  # y -> z: a quarter turn about x
-        turn[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
-    direction = np.zeros(3)
-    direction[axis] = 1.0
-    shaft_length, head_length = 0.78 * length, 0.22 * length
-    shaft, head = turn.copy(), turn.copy()
-    shaft[:3, 3] = direction * shaft_length / 2
-    head[:3, 3] = direction * (shaft_length + head_length / 2)
-    return [
-        ("shaft", g.Cylinder(shaft_length, radius), shaft),
-        ("head", g.Cylinder(head_length, radiusTop=0.0, radiusBottom=2.2 * radius), head),
-    ]
-
-
 CAMERA_DIRECTION = np.array([1.0, -1.25, 0.85]) / np.linalg.norm([1.0, -1.25, 0.85])
 """From the scene's centre towards the camera: an elevated three-quarter view (world axes)."""
 
@@ -99,71 +57,6 @@ CAMERA_FILL = 0.9
 
 MESH_PADDING = 0.08
 """Metres added around frame origins for the link meshes' thickness."""
-
-
-def path_colours(spectral_radius: np.ndarray) -> np.ndarray:
-    """RGB (3, N) per path point: green where ρ < 1, red where ρ >= 1 (or undefined)."""
-    try:
-        converging = np.asarray(spectral_radius, dtype=float).reshape(-1) < 1.0
-    except (TypeError, ValueError):
-        raise InputError("spectral_radius must be a sequence of numbers") from None
-    green = np.array([0x2C, 0xA0, 0x2C]) / 255.0
-    red = np.array([0xD6, 0x27, 0x28]) / 255.0
-    return np.where(converging[None, :], green[:, None], red[:, None]).astype(np.float32)
-
-
-class _SendCount:
-    """A meshcat window that passes every command on to ``window``, counting them."""
-
-    def __init__(self, window: object) -> None:
-        self.window = window
-        self.count = 0
-
-    def send(self, command: object) -> None:
-        self.count += 1
-        self.window.send(command)  # type: ignore[attr-defined]
-
-
-class RobotVisualizer(MeshcatVisualizer):
-    """Pinocchio's MeshcatVisualizer, with two changes.
-
-    * Collada meshes are sent as :func:`~.collada.one_material_per_mesh` rewrites them:
-      meshcat 0.3.2's viewer skips the parts of a multi-material ``<mesh>`` (the module's
-      docstring says why).
-    * The names of the geometries it actually sent are kept in :attr:`drawn` (Pinocchio
-      only warns about the others), so the viewer can draw the skeleton where a link has none.
-    """
-
-    viewer: meshcat.Visualizer  # set by initViewer
-
-    def __init__(self, *args: object, **kwargs: object) -> None:
-        super().__init__(*args, **kwargs)
-        self.drawn: set[str] = set()
-
-    def loadMeshFromFile(self, geometry_object: pin.GeometryObject) -> object:
-        mesh = super().loadMeshFromFile(geometry_object)
-        text = getattr(mesh, "dae_raw", None)  # Pinocchio's DaeMeshGeometry: the file's text
-        if isinstance(text, str):
-            try:
-                mesh.dae_raw = one_material_per_mesh(text)
-            except InputError as error:
-                warnings.warn(
-                    f"{geometry_object.meshPath}: sent unchanged, its multi-material parts may not be drawn ({error})",
-                    stacklevel=2,
-                )
-        return mesh
-
-    def loadViewerGeometryObject(
-        self, geometry_object: pin.GeometryObject, geometry_type: pin.GeometryType, color: object = None
-    ) -> None:
-        viewer, counter = self.viewer, _SendCount(self.viewer.window)
-        self.viewer = meshcat.Visualizer(window=counter)  # the same /meshcat root, through the counter
-        try:
-            super().loadViewerGeometryObject(geometry_object, geometry_type, color)
-        finally:
-            self.viewer = viewer
-        if counter.count:
-            self.drawn.add(geometry_object.name)
 
 
 class Viewer:
@@ -435,4 +328,4 @@ class Viewer:
         self.close()
 
 
-__all__ = ["Viewer", "path_colours", "triad"]
+__all__ = ["ROOT", "Viewer"]
