@@ -40,20 +40,19 @@ documents and changes nothing, and nothing else raises.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from ..checks import check_positive, check_vector
-from ..control.commands import JointJog, Uncoupled
+from ..checks import check_positive
+from ..control.commands import JointJog
 from ..control.controller import Controller, Step
 from ..control.recorder import Playback, Recorder
 from ..errors import InputError, choices_hint
 from ..kinematics.manipulator import Robot, check_robot
-from ..kinematics.spatial import saturate
+from .held import STILL, Held, check_time, deflection
 from .recording import Recording
 
 FRAMES = ("hand", "base")
@@ -62,44 +61,6 @@ FRAMES = ("hand", "base")
 MODES = ("twist", "uncoupled")
 """The values of ``Teleop.command(mode=...)``: the hand's twist, or Barker's uncoupled
 arm/wrist mode (:class:`~pinrate.control.commands.Uncoupled`)."""
-
-
-class _Held(NamedTuple):
-    """The command held (one tuple, assigned at once: a reader never sees half of it).
-    ``linear`` m/s and ``angular`` rad/s (``frame`` axes; in the uncoupled mode ``angular``
-    holds the wrist joints' rates, one per axis), ``stamp`` s, ``mode`` a :data:`MODES` value
-    or ``"jog"``, ``jog`` {joint: rate} for a jog."""
-
-    linear: np.ndarray
-    angular: np.ndarray
-    stamp: float
-    mode: str = "twist"
-    jog: Mapping[str, float] = MappingProxyType({})
-
-    @property
-    def moves(self) -> bool:
-        """Something non-zero is commanded."""
-        return bool(self.linear.any() or self.angular.any() or any(self.jog.values()))
-
-
-_STILL = _Held(np.zeros(3), np.zeros(3), -math.inf)
-
-
-def _check_time(now: object) -> float:
-    if now is None:
-        return time.monotonic()
-    try:
-        stamp = float(now)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InputError(f"now must be a time in seconds, not {now!r}") from None
-    if not math.isfinite(stamp):
-        raise InputError(f"now must be finite, got {stamp}")
-    return stamp
-
-
-def _deflection(value: object, what: str) -> np.ndarray:
-    """Three stick deflections, clipped to [-1, 1]; InputError for a wrong shape or NaN."""
-    return np.clip(check_vector(value, 3, what), -1.0, 1.0)
 
 
 class Teleop:
@@ -156,7 +117,7 @@ class Teleop:
         self.last: Step | None = None
         self.halted = False
         self.dead_man = ""
-        self._command = _STILL
+        self._command = STILL
         self._clock = 0.0
         self._playback: Playback | None = None
         self._reversed_at = -math.inf
@@ -212,9 +173,9 @@ class Teleop:
         beyond the wrist's joints are ignored), the other wrist joints holding still.
         InputError for another mode, or for the uncoupled mode on a partition without
         linear components."""
-        linear_deflection = _deflection(linear, "linear")
-        angular_deflection = _deflection(angular, "angular")
-        stamp = _check_time(now)
+        linear_deflection = deflection(linear, "linear")
+        angular_deflection = deflection(angular, "angular")
+        stamp = check_time(now)
         if mode not in MODES:
             raise InputError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
         if mode == "uncoupled" and not self.controller.index.m:
@@ -223,7 +184,7 @@ class Teleop:
             linear_deflection * self.max_linear_speed,
             angular_deflection * self.max_angular_speed,
         )
-        held = _Held(linear_speed, angular_speed, stamp, mode)
+        held = Held(linear_speed, angular_speed, stamp, mode)
         self._command = held
         if held.moves:
             self.dead_man = ""  # the operator drives again
@@ -238,12 +199,12 @@ class Teleop:
         is not a joint that can be jogged (the message lists them) or a rate that is not a
         finite number."""
         jog = JointJog(rates)
-        stamp = _check_time(now)
+        stamp = check_time(now)
         joggable = self.controller.joggable
         for name in jog.rates:
             if name not in joggable:
                 raise InputError(f"jog: {name!r} is not a joint that can be jogged." + choices_hint(name, joggable))
-        held = _Held(np.zeros(3), np.zeros(3), stamp, "jog", MappingProxyType(dict(jog.rates)))
+        held = Held(np.zeros(3), np.zeros(3), stamp, "jog", MappingProxyType(dict(jog.rates)))
         self._command = held
         if held.moves:
             self.dead_man = ""
@@ -251,7 +212,7 @@ class Teleop:
     def stop(self) -> None:
         """Zero the command and end a reversal (the robot stops at the next tick); the record
         then ends where the robot is, and a :meth:`mark` made during the reversal applies."""
-        self._command = _STILL
+        self._command = STILL
         self.dead_man = ""
         self._end_playback()
 
@@ -317,16 +278,16 @@ class Teleop:
         (True), only commands dated after this ``now`` end it. InputError for a bad ``now``,
         and while :attr:`halted` ("halted: resume first": a halted robot does not move; nothing
         changes)."""
-        stamp = _check_time(now)
+        stamp = check_time(now)
         if self.halted:
             raise InputError("halted: resume first")
         if self._playback is not None:
-            self._command = _STILL
+            self._command = STILL
             self._reversed_at = stamp
             return True
         if len(self.recorder) < 2:
             return False
-        self._command = _STILL
+        self._command = STILL
         self._playback = self.recorder.playback(self.controller)
         self._reversed_at = stamp
         self.dead_man = ""
@@ -364,17 +325,17 @@ class Teleop:
         """(linear, angular) in m/s and rad/s, :attr:`frame` axes, that a tick at ``now``
         would command: zero when older than ``timeout`` or while halted (and for a jog; in
         the uncoupled mode, the wrist centre's velocity and the wrist joints' rates)."""
-        held = self._live(_check_time(now))
+        held = self._live(check_time(now))
         if held.mode == "jog":
             return np.zeros(3), np.zeros(3)
         return held.linear, held.angular
 
-    def _live(self, stamp: float) -> _Held:
+    def _live(self, stamp: float) -> Held:
         """The command a tick at ``stamp`` serves: the held one, or none (still) when it is
         older than ``timeout`` or while halted."""
         held = self._command
         if self.halted or stamp - held.stamp > self.timeout:
-            return _STILL
+            return STILL
         return held
 
     def tick(self, now: object = None) -> Step:
@@ -385,7 +346,7 @@ class Teleop:
         reversal's ``now`` ends a reversal before the step; so does reaching the segment's
         start after it. A non-zero command older than ``timeout`` counts as zero and sets
         :attr:`dead_man`. InputError for a bad ``now`` (nothing changes then)."""
-        stamp = _check_time(now)
+        stamp = check_time(now)
         held = self._live(stamp)
         commanded = held.moves
         expired = not (commanded or self.halted or self.dead_man) and self._playback is None
@@ -405,28 +366,11 @@ class Teleop:
             self._recording.add(stamp, step)
         return step
 
-    def _operator_step(self, held: _Held) -> Step:
+    def _operator_step(self, held: Held) -> Step:
         """One controller step of the held command (a twist, an uncoupled command, a jog)."""
         controller = self.controller
         observation = controller.observe_unchecked(self.q)
-        linear, angular = held.linear, held.angular
-        command: object
-        if held.mode == "jog":
-            command = JointJog(held.jog)
-        elif held.mode == "uncoupled":
-            if self._frame == "base":
-                linear = observation.world_T_sensor.rotation.T @ linear
-            index = controller.index
-            wrist = controller.partition.wrist
-            rates = {name: float(angular[axis]) for axis, name in enumerate(wrist[:3]) if angular[axis]}
-            # Each axis is a deflection up to max_linear_speed: the speed of their sum is bounded too.
-            centre_velocity, _ = saturate(linear[index.rows[: index.m]], self.max_linear_speed)
-            command = Uncoupled(centre_velocity, rates)
-        else:
-            if self._frame == "base":
-                sensor_R_world = observation.world_T_sensor.rotation.T
-                linear, angular = sensor_R_world @ linear, sensor_R_world @ angular
-            command = np.concatenate([linear, angular])[controller.index.rows]
+        command = held.command(controller, observation, self._frame, self.max_linear_speed)
         step = controller.step(self.q, command, observation=observation)
         if step.joint_rates.any():
             if not len(self.recorder):
