@@ -96,7 +96,7 @@ def _listed(value: object) -> list[Any]:
     return list(value) if isinstance(value, list) else []
 
 
-class Socket(Guarded, tornado.websocket.WebSocketHandler):
+class PageSocket(Guarded, tornado.websocket.WebSocketHandler):
     """One page. The handshake passes :class:`~.handlers.Guarded`'s checks, the Origin rule
     and the cap; its messages are rate-limited, then read by its :class:`Pages`."""
 
@@ -149,7 +149,7 @@ class Socket(Guarded, tornado.websocket.WebSocketHandler):
         self.pages.close(self)
 
 
-Request = tuple[str, dict[str, Any], Socket | None]
+Request = tuple[str, dict[str, Any], PageSocket | None]
 """An action for the control thread: (name, arguments, the page that asked or None)."""
 
 
@@ -196,8 +196,8 @@ class Pages:
         self.changed = changed
         self.loop: asyncio.AbstractEventLoop | None = None
         self.requests: queue.SimpleQueue[Request] = queue.SimpleQueue()
-        self.clients: list[Socket] = []
-        self.controller: Socket | None = None
+        self.clients: list[PageSocket] = []
+        self.controller: PageSocket | None = None
         self.next_client = 1
         self.last_heard = -math.inf
         self.main_heard = -math.inf
@@ -216,7 +216,7 @@ class Pages:
         return f"the page froze: its main thread silent for {self.freeze_limit:g} s"
 
     # ------------------------------------------------------------------ what pages are sent
-    def send(self, client: Socket, message: dict[str, Any] | bytes) -> Any:
+    def send(self, client: PageSocket, message: dict[str, Any] | bytes) -> Any:
         """Write one message to a page; the write's future (its failure, a page gone
         mid-write, is retrieved here: never a "Task exception was never retrieved")."""
         try:
@@ -229,11 +229,11 @@ class Pages:
         written.add_done_callback(_retrieved)
         return written
 
-    def role(self, client: Socket) -> dict[str, Any]:
+    def role(self, client: PageSocket) -> dict[str, Any]:
         return {"type": "role", "controlling": client is self.controller, "free": self.controller is None}
 
     def event(
-        self, text: str, level: str = "info", client: Socket | None = None, links: list[str] | None = None
+        self, text: str, level: str = "info", client: PageSocket | None = None, links: list[str] | None = None
     ) -> None:
         """Say ``text`` on every page (or on ``client``'s), from any thread."""
         message = {"type": "event", "level": level, "text": text, "links": links or []}
@@ -258,7 +258,7 @@ class Pages:
                 client.pending = client.write_message(text)
 
     # ------------------------------------------------------------------ pages coming and going
-    def open(self, client: Socket) -> None:
+    def open(self, client: PageSocket) -> None:
         client.client_id = self.next_client
         self.next_client += 1
         self.clients.append(client)
@@ -270,7 +270,7 @@ class Pages:
         if loop is not None:
             loop.create_task(self.send_scene(client)).add_done_callback(_retrieved)
 
-    async def send_scene(self, client: Socket) -> None:
+    async def send_scene(self, client: PageSocket) -> None:
         """The shared encoded scene, one chunk at a time (a page that does not read holds one
         chunk, not the scene), then the page's role; frames start after it."""
         client.pending = _Busy()  # no frame until the scene is there
@@ -286,7 +286,7 @@ class Pages:
         self.send(client, self.role(client))
         self.changed.set()  # a fresh frame for the new page
 
-    def close(self, client: Socket) -> None:
+    def close(self, client: PageSocket) -> None:
         if client in self.clients:
             self.clients.remove(client)
         if client is self.controller:
@@ -296,9 +296,9 @@ class Pages:
                 self.send(other, self.role(other))
 
     # ------------------------------------------------------------------ what pages say
-    def message(self, client: Socket, message: str | bytes, arrived: float) -> None:
+    def message(self, client: PageSocket, message: str | bytes, arrived: float) -> None:
         """One message from a page, read at ``arrived`` (monotonic s). Unreadable ones (not
-        JSON, too deep, not an object) raise; :meth:`Socket.on_message` answers them."""
+        JSON, too deep, not an object) raise; :meth:`PageSocket.on_message` answers them."""
         data = json.loads(message)
         if not isinstance(data, dict) or not isinstance(data.get("type"), str):
             raise ValueError("not a message")
@@ -334,7 +334,7 @@ class Pages:
         return max(0.0, (float(sent) - float(alive)) / 1000.0)  # type: ignore[arg-type]
 
     @staticmethod
-    def sent_at(client: Socket, stamp: object, arrived: float) -> float:
+    def sent_at(client: PageSocket, stamp: object, arrived: float) -> float:
         """When the page sent a message, on this process's monotonic clock: the page's own
         stamp (``sent``, ms of its ``performance.now()``) plus the smallest offset seen
         between the two clocks (the least delay), which may grow by :data:`CLOCK_DRIFT` a
@@ -399,7 +399,7 @@ __all__ = [
     "MAX_PAGES",
     "MESSAGE_BURST",
     "MESSAGE_RATE",
+    "PageSocket",
     "Pages",
     "Request",
-    "Socket",
 ]

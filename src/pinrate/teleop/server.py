@@ -69,7 +69,7 @@ from .pacing import MIN_SLEEP, REALTIME_PRIORITY, LoopStats, request_realtime
 from .protocol import CLOCK_DRIFT as CLOCK_DRIFT
 from .protocol import FLOOD_LIMIT as FLOOD_LIMIT
 from .protocol import FREEZE_LIMIT as FREEZE_LIMIT
-from .protocol import JOG_SHARE, Pages, Socket
+from .protocol import JOG_SHARE, Pages, PageSocket
 from .protocol import MAX_PAGES as MAX_PAGES
 from .protocol import MESSAGE_BURST as MESSAGE_BURST
 from .protocol import MESSAGE_RATE as MESSAGE_RATE
@@ -304,7 +304,8 @@ class TeleopServer:
         loop = asyncio.new_event_loop()
         asyncio.set_event_loop(loop)
         self.pages.loop = loop
-        http = web_server(self.access, self.files, self.served, (Socket, {"access": self.access, "pages": self.pages}))
+        socket_handler = (PageSocket, {"access": self.access, "pages": self.pages})
+        http = web_server(self.access, self.files, self.served, socket_handler)
         http.add_sockets(self._sockets)
         loop.call_soon(self._web_ready.set)
         try:
