@@ -4,7 +4,8 @@ Each test is an attack somebody ran against an earlier console, bounded in count
 DNS rebinding, a socket without an Origin, files outside the recordings, framing, a shared
 address without a token, idle and slow clients, floods, malformed messages, a backlog that
 kept the robot moving, and an exception in the control loop. The model they check is
-:mod:`pinrate.teleop.access` and the caps of :mod:`pinrate.teleop.server`.
+:mod:`pinrate.teleop.access` and the caps of :mod:`pinrate.teleop.handlers` and
+:mod:`pinrate.teleop.protocol` (re-exported by :mod:`pinrate.teleop.server`).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import tornado.httpclient
 import tornado.websocket
 
 import pinrate
+from pinrate.teleop import handlers
 from pinrate.teleop import server as server_module
 from pinrate.teleop.server import MAX_PAGES, TeleopServer
 from support import wait_for
@@ -182,8 +184,8 @@ def test_a_shared_address_needs_the_token_the_url_carries(ur5, tmp_path):
 
 # ---------------------------------------------------------------- what a client can cost
 def test_a_page_that_never_reads_holds_one_chunk_of_the_scene_not_the_scene(server):
-    largest = max(len(chunk) for chunk in server._scene)
-    assert sum(len(chunk) for chunk in server._scene) > 2 * largest  # the claim below means something
+    largest = max(len(chunk) for chunk in server.pages.scene)
+    assert sum(len(chunk) for chunk in server.pages.scene) > 2 * largest  # the claim below means something
     sockets = []
     for _ in range(3):
         raw = socket.create_connection(("127.0.0.1", server.port))
@@ -199,7 +201,7 @@ def test_a_page_that_never_reads_holds_one_chunk_of_the_scene_not_the_scene(serv
     try:
         assert wait_for(lambda: server.clients == 3)
         time.sleep(1.0)
-        for client in list(server._clients):
+        for client in list(server.pages.clients):
             queued = len(client.ws_connection.stream._write_buffer)  # tornado's unsent bytes
             assert queued <= largest + 64, (queued, largest)
     finally:
@@ -241,7 +243,7 @@ def test_pages_gone_mid_write_leave_no_unretrieved_task(server, caplog):
 
 
 def test_half_sent_requests_neither_lock_the_page_out_nor_stay(ur5, tmp_path, monkeypatch):
-    monkeypatch.setattr(server_module, "HEADER_TIMEOUT", 1.0)
+    monkeypatch.setattr(handlers, "HEADER_TIMEOUT", 1.0)  # read where the HTTP server is made
     teleop = pinrate.Teleop(ur5, dt=0.002)
     with TeleopServer(teleop, record_dir=tmp_path) as running:
         partial = []
@@ -325,7 +327,7 @@ def test_a_malformed_message_is_refused_and_the_socket_stays(server, message, an
                     break
         await client.write_message(json.dumps({"type": "input", "seq": 7, "keys": []}))
         deadline = time.monotonic() + 5
-        while server._input_seq != 7 and time.monotonic() < deadline:
+        while server.pages.input_seq != 7 and time.monotonic() < deadline:
             await asyncio.sleep(0.01)
         await asyncio.sleep(0.2)
         alive = server.clients == 1 and client.close_code is None
@@ -334,7 +336,7 @@ def test_a_malformed_message_is_refused_and_the_socket_stays(server, message, an
 
     said, alive = asyncio.run(attack())
     assert alive
-    assert server._input_seq == 7
+    assert server.pages.input_seq == 7
     assert said == answered
 
 

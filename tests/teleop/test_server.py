@@ -344,11 +344,11 @@ def test_close_right_after_stopping_a_recording_writes_it_whole(tmp_path):
 
 def test_a_recording_without_a_tick_is_said_and_not_saved(server, caplog):
     messages = []
-    original = server._event
-    server._event = lambda text, *args, **kwargs: (messages.append(text), original(text, *args, **kwargs))
+    original = server.pages.event
+    server.pages.event = lambda text, *args, **kwargs: (messages.append(text), original(text, *args, **kwargs))
     server.teleop.halt()  # the loop still ticks; stop the recording before any tick lands
-    server._actions.put(("record", {"on": True}, None))
-    server._actions.put(("record", {"on": False}, None))
+    server.act("record", on=True)
+    server.act("record", on=False)
     assert wait_for(lambda: any("no tick was recorded" in text for text in messages), timeout=30)
     time.sleep(0.3)
     assert server.saved == []  # nothing to replay: no files, and no save thread died

@@ -86,8 +86,15 @@
   // Chrome's gamepads are snapshots: polled every animation frame and every ALIVE_MS; a
   // change goes out at once, otherwise the poll is the main thread's sign of life.
   let lastPad = "null";
+  let polledAt = performance.now();
   function poll() {
-    if (hidDevice && state.hid.some(Boolean) && performance.now() - hidHeardAt > HID_STALE_MS) {
+    const now = performance.now();
+    // A main thread blocked (software rendering) holds the device's reports back with it:
+    // silence is counted from the end of such a block, not through it (a page frozen for
+    // longer is the server's freeze rule's).
+    if (now - polledAt > 4 * ALIVE_MS) hidHeardAt = Math.max(hidHeardAt, now);
+    polledAt = now;
+    if (hidDevice && state.hid.some(Boolean) && now - hidHeardAt > HID_STALE_MS) {
       state.hid = [0, 0, 0, 0, 0, 0];
       $("spacemouse").textContent = `SpaceMouse silent for ${HID_STALE_MS} ms while deflected: stopped`;
       sendInput();
