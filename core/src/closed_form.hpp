@@ -12,9 +12,9 @@
 #include <stdexcept>
 #include <string>
 
-namespace pinrate_core {
+#include "boundary.hpp"
 
-constexpr double kSingularRatioSquared = 1e-10 * 1e-10;  // pinrate.solvers.singular.SINGULAR_RATIO ** 2
+namespace pinrate_core {
 
 // A square block of size 0 to 3 (row-major) or a rectangular one up to 3x3.
 struct Block {
@@ -230,7 +230,7 @@ inline double spectral_radius_3(const Block &M) {
     return py_max(std::fabs(u + v + shift), std::hypot(real_part, imaginary_part));
   }
   // Viete
-  const bool flat = p >= -1e-200;
+  const bool flat = p >= -kFlat;
   if (flat) return std::fabs(shift);
   const double radius = 2.0 * std::sqrt(-p * (1.0 / 3.0));
   const double angle = std::acos(py_max(-1.0, py_min(1.0, 3.0 * q / (p * radius)))) * (1.0 / 3.0);

@@ -41,10 +41,10 @@ struct GeneralRates {
 };
 
 // reference.mca1 / mca2 / mca3 / schur with reference.inverse.
-inline GeneralRates general_kernel(int kernel, const Matrix &A, const Matrix &B, const Matrix &U, const Matrix &W,
+inline GeneralRates general_kernel(Kernel kernel, const Matrix &A, const Matrix &B, const Matrix &U, const Matrix &W,
                                    const Eigen::VectorXd &v, const Eigen::VectorXd &omega, double rcond) {
   GeneralRates out;
-  if (kernel == 1) {  // schur
+  if (kernel == SCHUR) {
     const Matrix W_inv = reference_inverse(W, "W", rcond);
     const Matrix complement = A - B * W_inv * U;
     out.arm = reference_inverse(complement, "A - B W^-1 U", rcond) * (v - B * (W_inv * omega));
@@ -52,13 +52,13 @@ inline GeneralRates general_kernel(int kernel, const Matrix &A, const Matrix &B,
     return out;
   }
   const Matrix A_inv = reference_inverse(A, "A", rcond), W_inv = reference_inverse(W, "W", rcond);
-  if (kernel == 2) {  // mca1
+  if (kernel == MCA1) {
     out.wrist = W_inv * omega;
     out.arm = A_inv * (v - B * out.wrist);
-  } else if (kernel == 3) {  // mca2
+  } else if (kernel == MCA2) {
     out.arm = A_inv * v;
     out.wrist = W_inv * (omega - U * out.arm);
-  } else {  // mca3
+  } else {  // MCA3
     out.arm = A_inv * (v - B * (W_inv * omega));
     out.wrist = W_inv * (omega - U * (A_inv * v));
   }

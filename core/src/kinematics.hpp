@@ -7,6 +7,7 @@
 // with pin's to the last bit where both builds round alike.
 #pragma once
 
+#include <array>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -25,22 +26,38 @@ using SE3 = pinocchio::SE3;
 using Matrix6x = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 using Vector = Eigen::VectorXd;
 
-// The joint kinds rebuilt here (pin's JointModel shortname()); any other makes the Python
-// side fall back to its own path.
-inline pinocchio::JointModel joint_model(const std::string &kind, const Eigen::Vector3d &axis) {
+// The joint kinds rebuilt here (pin's JointModel shortname()), exported as
+// pinrate_core.JOINT_KINDS and checked against pinrate.compiled.boundary.REBUILT_JOINTS; a
+// robot with any other runs on the Python side's own path.
+struct JointKind {
+  const char *name;
+  pinocchio::JointModel (*make)(const Eigen::Vector3d &axis);
+};
+
+inline const std::array<JointKind, 12> &joint_kinds() {
   using namespace pinocchio;
-  if (kind == "JointModelRX") return JointModelRX();
-  if (kind == "JointModelRY") return JointModelRY();
-  if (kind == "JointModelRZ") return JointModelRZ();
-  if (kind == "JointModelRevoluteUnaligned") return JointModelRevoluteUnaligned(axis);
-  if (kind == "JointModelRUBX") return JointModelRUBX();
-  if (kind == "JointModelRUBY") return JointModelRUBY();
-  if (kind == "JointModelRUBZ") return JointModelRUBZ();
-  if (kind == "JointModelRevoluteUnboundedUnaligned") return JointModelRevoluteUnboundedUnaligned(axis);
-  if (kind == "JointModelPX") return JointModelPX();
-  if (kind == "JointModelPY") return JointModelPY();
-  if (kind == "JointModelPZ") return JointModelPZ();
-  if (kind == "JointModelPrismaticUnaligned") return JointModelPrismaticUnaligned(axis);
+  using Axis = const Eigen::Vector3d &;
+  static const std::array<JointKind, 12> kinds = {{
+      {"JointModelRX", [](Axis) -> JointModel { return JointModelRX(); }},
+      {"JointModelRY", [](Axis) -> JointModel { return JointModelRY(); }},
+      {"JointModelRZ", [](Axis) -> JointModel { return JointModelRZ(); }},
+      {"JointModelRevoluteUnaligned", [](Axis axis) -> JointModel { return JointModelRevoluteUnaligned(axis); }},
+      {"JointModelRUBX", [](Axis) -> JointModel { return JointModelRUBX(); }},
+      {"JointModelRUBY", [](Axis) -> JointModel { return JointModelRUBY(); }},
+      {"JointModelRUBZ", [](Axis) -> JointModel { return JointModelRUBZ(); }},
+      {"JointModelRevoluteUnboundedUnaligned",
+       [](Axis axis) -> JointModel { return JointModelRevoluteUnboundedUnaligned(axis); }},
+      {"JointModelPX", [](Axis) -> JointModel { return JointModelPX(); }},
+      {"JointModelPY", [](Axis) -> JointModel { return JointModelPY(); }},
+      {"JointModelPZ", [](Axis) -> JointModel { return JointModelPZ(); }},
+      {"JointModelPrismaticUnaligned", [](Axis axis) -> JointModel { return JointModelPrismaticUnaligned(axis); }},
+  }};
+  return kinds;
+}
+
+inline pinocchio::JointModel joint_model(const std::string &kind, const Eigen::Vector3d &axis) {
+  for (const JointKind &known : joint_kinds())
+    if (kind == known.name) return known.make(axis);
   throw std::invalid_argument("joint kind " + kind + " is not supported by the compiled core");
 }
 

@@ -1,20 +1,29 @@
 // pinrate_core: the compiled core of pinrate (Python bindings, nanobind).
 //
 // Kinematics(...)                    a private Pinocchio model rebuilt from the Python model
-// Servo(kinematics, ...)             the controller's settings; run(...) runs the servo loop
+// Settings()                         the controller's settings, set field by field, by name
+// Servo(kinematics, settings)        a controller's twin; run(...) runs the servo loop
 // spectral_radius_at(kin, ..., qs)   rho at each configuration (sample_convergence)
 // solve_timing(...)                  one algorithm's solve alone, repeated (benchmarks)
+//
+// and the constants of boundary.hpp (KERNELS, SINGULAR_RATIO, ...), which pinrate.compiled
+// checks against its own when it loads the core.
 //
 // pinrate.compiled wraps all of this; nothing else calls it.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/array.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
 #include <chrono>
+#include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
+#include "boundary.hpp"
 #include "closed_form.hpp"
 #include "kinematics.hpp"
 #include "servo.hpp"
@@ -45,59 +54,147 @@ Kinematics make_kinematics(const std::vector<std::string> &kinds, const std::vec
                         sensor_placement.data(), same_frame);
 }
 
-Servo make_servo(Kinematics &kinematics, const std::vector<int> &rows, const std::vector<int> &columns, int m,
-                  int n_arm, int kernel, const std::vector<std::string> &measured, const std::vector<double> &row_scale,
-                  double slow_threshold, bool watch, double watch_factor, double watched_step,
-                  double max_linear_speed, double max_angular_speed, double dt, bool position_limits,
-                  Array<const double> limits, Array<const double> rate_limits, double exact_rcond,
-                  double dls_damping, bool small, const std::vector<int> &ranks, double pinv_rcond) {
-  Settings s;
-  s.small = small;
-  if (ranks.size() != 3) throw std::invalid_argument("ranks must be (J, A, W)");
-  s.rank_j = ranks[0];
-  s.rank_a = ranks[1];
-  s.rank_w = ranks[2];
-  s.pinv_rcond = pinv_rcond;
-  s.rows = rows;
-  s.columns = columns;
-  s.m = m;
-  s.n_arm = n_arm;
-  s.kernel = kernel;
-  for (const std::string &name : measured) {
-    s.measure_a |= name == "A";
-    s.measure_w |= name == "W";
-    s.measure_j |= name == "J";
-  }
-  s.row_scale = row_scale;
-  s.slow_threshold = slow_threshold;
-  s.watch = watch;
-  s.watch_factor = watch_factor;
-  s.watched_step = watched_step;
-  s.max_linear_speed = max_linear_speed;
-  s.max_angular_speed = max_angular_speed;
-  s.dt = dt;
-  s.position_limits = position_limits;
-  // limits: (L, 4) rows of q index, v index, lower, upper; rate_limits: (R, 2) v index, limit.
-  for (std::size_t i = 0; i < limits.size() / 4; ++i) {
-    const double *row = limits.data() + 4 * i;
-    s.limits.push_back({static_cast<int>(row[0]), static_cast<int>(row[1]), row[2], row[3]});
-  }
-  for (std::size_t i = 0; i < rate_limits.size() / 2; ++i) {
-    const double *row = rate_limits.data() + 2 * i;
-    s.rate_limits.push_back({static_cast<int>(row[0]), row[1]});
-  }
-  s.exact_rcond = exact_rcond;
-  s.dls_damping = dls_damping;
-  const int n_rows = static_cast<int>(rows.size());
-  for (int index : rows)
+// A tuple of the list's items (Python's tuple(items)).
+nb::tuple tuple_of(const nb::list &items) {
+  PyObject *result = PySequence_Tuple(items.ptr());
+  if (!result) throw nb::python_error();
+  return nb::steal<nb::tuple>(result);
+}
+
+// pinrate_core.Settings: a Settings and the names of the fields Python has set.
+struct GivenSettings {
+  Settings settings;
+  std::set<std::string> given;
+};
+
+// Every field's name, in the order bound (pinrate_core.Settings.FIELDS).
+std::vector<std::string> &settings_fields() {
+  static std::vector<std::string> names;
+  return names;
+}
+
+// A field of pinrate_core.Settings: a property named as ServoSettings' field, which reads and
+// writes the Settings through get and set and records that it was given.
+template <typename T, typename Get, typename Set>
+void field(nb::class_<GivenSettings> &settings, const char *name, Get get, Set set) {
+  settings_fields().push_back(name);
+  settings.def_prop_rw(
+      name, [get](const GivenSettings &self) { return get(self.settings); },
+      [set, name](GivenSettings &self, T value) {
+        set(self.settings, std::move(value));
+        self.given.insert(name);
+      });
+}
+
+// A field that is a Settings member of the same name and type.
+template <typename T>
+void member(nb::class_<GivenSettings> &settings, const char *name, T Settings::*pointer) {
+  field<T>(
+      settings, name, [pointer](const Settings &s) { return s.*pointer; },
+      [pointer](Settings &s, T value) { s.*pointer = std::move(value); });
+}
+
+using LimitRow = std::tuple<int, int, double, double>;  // q index, v index, lower, upper
+using RateLimitRow = std::tuple<int, double>;           // v index, limit
+
+void bind_settings(nb::module_ &module) {
+  nb::class_<GivenSettings> settings(module, "Settings",
+                                     "A controller's settings (pinrate.compiled.ServoSettings), set by field name; "
+                                     "FIELDS names them, and a Servo needs each set");
+  settings.def(nb::init<>());
+  member(settings, "rows", &Settings::rows);
+  member(settings, "columns", &Settings::columns);
+  member(settings, "m", &Settings::m);
+  member(settings, "n_arm", &Settings::n_arm);
+  field<std::string>(
+      settings, "algorithm", [](const Settings &s) { return std::string(kKernelNames[s.kernel]); },
+      [](Settings &s, const std::string &name) { s.kernel = kernel_of(name); });
+  field<std::vector<std::string>>(
+      settings, "measured",
+      [](const Settings &s) {
+        const bool measured[] = {s.measure_a, s.measure_w, s.measure_j};  // kMeasurable's order
+        std::vector<std::string> names;
+        for (std::size_t i = 0; i < kMeasurable.size(); ++i)
+          if (measured[i]) names.emplace_back(kMeasurable[i]);
+        return names;
+      },
+      [](Settings &s, const std::vector<std::string> &names) {
+        bool *flags[] = {&s.measure_a, &s.measure_w, &s.measure_j};  // kMeasurable's order
+        for (bool *flag : flags) *flag = false;
+        for (const std::string &name : names) {
+          std::size_t i = 0;
+          while (i < kMeasurable.size() && name != kMeasurable[i]) ++i;
+          if (i == kMeasurable.size()) throw std::invalid_argument("the compiled core measures no block " + name);
+          *flags[i] = true;
+        }
+      });
+  member(settings, "row_scale", &Settings::row_scale);
+  member(settings, "slow_threshold", &Settings::slow_threshold);
+  member(settings, "watch", &Settings::watch);
+  member(settings, "watch_factor", &Settings::watch_factor);
+  member(settings, "watched_step", &Settings::watched_step);
+  member(settings, "max_linear_speed", &Settings::max_linear_speed);
+  member(settings, "max_angular_speed", &Settings::max_angular_speed);
+  member(settings, "dt", &Settings::dt);
+  member(settings, "position_limits", &Settings::position_limits);
+  field<std::vector<LimitRow>>(
+      settings, "limits",
+      [](const Settings &s) {
+        std::vector<LimitRow> rows;
+        for (const Limit &limit : s.limits) rows.emplace_back(limit.q_index, limit.v_index, limit.lower, limit.upper);
+        return rows;
+      },
+      [](Settings &s, const std::vector<LimitRow> &rows) {
+        s.limits.clear();
+        for (const auto &[q_index, v_index, lower, upper] : rows) s.limits.push_back({q_index, v_index, lower, upper});
+      });
+  field<std::vector<RateLimitRow>>(
+      settings, "rate_limits",
+      [](const Settings &s) {
+        std::vector<RateLimitRow> rows;
+        for (const RateLimit &row : s.rate_limits) rows.emplace_back(row.v_index, row.limit);
+        return rows;
+      },
+      [](Settings &s, const std::vector<RateLimitRow> &rows) {
+        s.rate_limits.clear();
+        for (const auto &[v_index, limit] : rows) s.rate_limits.push_back({v_index, limit});
+      });
+  member(settings, "exact_rcond", &Settings::exact_rcond);
+  member(settings, "dls_damping", &Settings::dls_damping);
+  member(settings, "small", &Settings::small);
+  field<std::array<int, 3>>(
+      settings, "ranks", [](const Settings &s) { return std::array<int, 3>{s.rank_j, s.rank_a, s.rank_w}; },
+      [](Settings &s, const std::array<int, 3> &ranks) {  // (J, A, W)
+        s.rank_j = ranks[0];
+        s.rank_a = ranks[1];
+        s.rank_w = ranks[2];
+      });
+  member(settings, "pinv_rcond", &Settings::pinv_rcond);
+  nb::list names;
+  for (const std::string &name : settings_fields()) names.append(name);
+  settings.attr("FIELDS") = tuple_of(names);
+}
+
+Servo make_servo(Kinematics &kinematics, const GivenSettings &given) {
+  for (const std::string &name : settings_fields())
+    if (!given.given.count(name)) throw std::invalid_argument("pinrate_core.Settings." + name + " is not set");
+  const Settings &s = given.settings;
+  const int n_rows = static_cast<int>(s.rows.size()), n_columns = static_cast<int>(s.columns.size());
+  for (int index : s.rows)
     if (index < 0 || index >= 6) throw std::invalid_argument("row index out of range");
-  for (int index : columns)
+  for (int index : s.columns)
     if (index < 0 || index >= kinematics.nv()) throw std::invalid_argument("column index out of range");
-  if (small && (m < 0 || m > 3 || n_rows - m > 3 || n_arm < 0 || n_arm > 3 || static_cast<int>(columns.size()) - n_arm > 3))
+  if (s.small && (s.m < 0 || s.m > 3 || n_rows - s.m > 3 || s.n_arm < 0 || s.n_arm > 3 || n_columns - s.n_arm > 3))
     throw std::invalid_argument("the closed forms take blocks of at most 3x3");
-  if (m < 0 || m > n_rows || n_arm < 0 || n_arm > static_cast<int>(columns.size()))
+  if (s.m < 0 || s.m > n_rows || s.n_arm < 0 || s.n_arm > n_columns)
     throw std::invalid_argument("m or n_arm out of range");
-  return Servo(kinematics, std::move(s));
+  if (s.measure_j && s.row_scale.size() != s.rows.size()) throw std::invalid_argument("row_scale must have a value per row");
+  for (const Limit &limit : s.limits)
+    if (limit.q_index < 0 || limit.q_index >= kinematics.nq() || limit.v_index < 0 || limit.v_index >= kinematics.nv())
+      throw std::invalid_argument("limit index out of range");
+  for (const RateLimit &row : s.rate_limits)
+    if (row.v_index < 0 || row.v_index >= kinematics.nv()) throw std::invalid_argument("rate limit index out of range");
+  return Servo(kinematics, s);
 }
 
 nb::tuple run_servo(Servo &servo, Array<const double> q0, Array<const double> target,
@@ -156,7 +253,10 @@ void spectral_radius_at(Servo &servo, Array<const double> configurations,
 // Seconds per call of one block algorithm's solve on the current J (kernel names as above):
 // the paper's comparison of MCA1 with the exact step, without the loop around it.
 double solve_timing(Servo &servo, Array<const double> q, Array<const double> twist,
-                    int kernel, long repeats) {
+                    const std::string &algorithm, long repeats) {
+  const Kernel kernel = kernel_of(algorithm);
+  if (kernel != EXACT && kernel != MCA1 && kernel != MCA2)
+    throw std::invalid_argument("solve_timing times exact, mca1 or mca2, not " + algorithm);
   Kinematics &kinematics = servo.kinematics();
   kinematics.compute(Eigen::Map<const Vector>(q.data(), kinematics.nq()));
   const Blocks b = servo.blocks();
@@ -193,7 +293,29 @@ NB_MODULE(pinrate_core, module) {
   // pinrate keeps a Kinematics per Robot until exit; that is no leak worth a warning.
   nb::set_leak_warnings(false);
   module.attr("PINOCCHIO_VERSION") = PINOCCHIO_VERSION;
-  module.attr("ABI") = 1;  // bumped when pinrate.compiled must change with it
+  module.attr("ABI") = 2;  // bumped when pinrate.compiled must change with it
+
+  // boundary.hpp's constants, which pinrate.compiled.boundary checks at load.
+  module.attr("SINGULAR_RATIO") = kSingularRatio;
+  module.attr("FLAT") = kFlat;
+  nb::list kernels, outcomes, measurable, joint_kinds_list;
+  for (const char *name : kKernelNames) kernels.append(name);
+  module.attr("KERNELS") = tuple_of(kernels);
+  for (std::size_t value = 0; value < kOutcomeNames.size(); ++value) {
+    outcomes.append(kOutcomeNames[value]);
+    module.attr(kOutcomeNames[value]) = static_cast<int>(value);
+  }
+  module.attr("OUTCOMES") = tuple_of(outcomes);  // by value
+  nb::dict step_flags;
+  for (const NamedFlag &flag : kStepFlags) {
+    step_flags[flag.name] = flag.value;
+    module.attr(flag.name) = flag.value;
+  }
+  module.attr("STEP_FLAGS") = step_flags;
+  for (const char *name : kMeasurable) measurable.append(name);
+  module.attr("MEASURABLE") = tuple_of(measurable);
+  for (const JointKind &kind : joint_kinds()) joint_kinds_list.append(kind.name);
+  module.attr("JOINT_KINDS") = tuple_of(joint_kinds_list);
 
   nb::class_<Kinematics>(module, "Kinematics")
       .def("__init__",
@@ -218,32 +340,15 @@ NB_MODULE(pinrate_core, module) {
           },
           "q"_a, "J in the sensor frame's axes (6, nv) at q");
 
+  bind_settings(module);
+
   nb::class_<Servo>(module, "Servo")
       .def("__init__",
-           [](Servo *self, Kinematics &kinematics, const std::vector<int> &rows, const std::vector<int> &columns,
-              int m, int n_arm, int kernel, const std::vector<std::string> &measured,
-              const std::vector<double> &row_scale, double slow_threshold, bool watch, double watch_factor,
-              double watched_step, double max_linear_speed, double max_angular_speed, double dt,
-              bool position_limits, Array<const double> limits, Array<const double> rate_limits, double exact_rcond,
-              double dls_damping, bool small, const std::vector<int> &ranks, double pinv_rcond) {
-             new (self) Servo(make_servo(kinematics, rows, columns, m, n_arm, kernel, measured, row_scale,
-                                      slow_threshold, watch, watch_factor, watched_step, max_linear_speed,
-                                      max_angular_speed, dt, position_limits, limits, rate_limits, exact_rcond,
-                                      dls_damping, small, ranks, pinv_rcond));
+           [](Servo *self, Kinematics &kinematics, const GivenSettings &settings) {
+             new (self) Servo(make_servo(kinematics, settings));
            },
-           nb::keep_alive<1, 2>())
+           "kinematics"_a, "settings"_a, nb::keep_alive<1, 2>())
       .def("run", &run_servo)
       .def("spectral_radius_at", &spectral_radius_at)
       .def("solve_timing", &solve_timing);
-
-  module.attr("CONVERGED") = static_cast<int>(CONVERGED);
-  module.attr("DIVERGING") = static_cast<int>(DIVERGING);
-  module.attr("STALLED") = static_cast<int>(STALLED);
-  module.attr("MAX_STEPS") = static_cast<int>(MAX_STEPS);
-  module.attr("HANDBACK") = static_cast<int>(HANDBACK);
-  module.attr("FULL") = static_cast<int>(FULL);
-  module.attr("SATURATED") = static_cast<int>(SATURATED);
-  module.attr("RATE_LIMITED") = static_cast<int>(RATE_LIMITED_FLAG);
-  module.attr("CLAMPED") = static_cast<int>(CLAMPED);
-  module.attr("KERNELS") = nb::make_tuple("exact", "schur", "mca1", "mca2", "mca3", "dls");
 }

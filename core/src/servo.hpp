@@ -14,22 +14,15 @@
 #include <functional>
 #include <vector>
 
+#include "boundary.hpp"
 #include "closed_form.hpp"
 #include "general.hpp"
 #include "kinematics.hpp"
 
 namespace pinrate_core {
 
-enum Kernel { EXACT = 0, SCHUR = 1, MCA1 = 2, MCA2 = 3, MCA3 = 4, DLS = 5 };
-
-// What ended a run of the loop.
-enum Outcome { CONVERGED = 0, DIVERGING = 1, STALLED = 2, MAX_STEPS = 3, HANDBACK = 4, FULL = 5, INTERRUPTED = 6 };
-
 // Steps between two looks at the caller's signals (Ctrl-C): about 5 ms of loop.
 constexpr long kSignalCheckSteps = 4096;
-
-// Flags of a step taken here (pinrate.control.Status members met).
-enum StepFlag { SATURATED = 1, RATE_LIMITED_FLAG = 2, CLAMPED = 4 };
 
 struct Limit {
   int q_index, v_index;
@@ -41,24 +34,26 @@ struct RateLimit {
   double limit;
 };
 
-// The controller's settings, from pinrate.control.Controller (see compiled/servo.py).
+// The controller's settings, from pinrate.control.Controller: module.cpp binds them as
+// pinrate_core.Settings, which pinrate.compiled fills from ServoSettings field by field, by
+// name. No defaults here: every field is set from Python (a Servo is refused while one is not).
 struct Settings {
   std::vector<int> rows;     // the twist's rows of J, partition order (m linear first)
   std::vector<int> columns;  // velocity indices of the partition's joints, arm then wrist
-  int m = 0, n_arm = 0;
-  int kernel = MCA1;
-  bool measure_a = false, measure_w = false, measure_j = false;
+  int m{}, n_arm{};
+  Kernel kernel{};  // set by name (the field "algorithm")
+  bool measure_a{}, measure_w{}, measure_j{};  // set by letter (the field "measured")
   std::vector<double> row_scale;  // (m + k,)
-  double slow_threshold = 0.0, watch_factor = 3.0, watched_step = 0.02;
-  bool watch = true;  // singularity="decelerate" (or auxiliary_elbow): judge big steps near the region
-  double max_linear_speed = INFINITY, max_angular_speed = INFINITY, dt = 0.01;
-  bool position_limits = true;
+  double slow_threshold{}, watch_factor{}, watched_step{};
+  bool watch{};  // singularity="decelerate" (or auxiliary_elbow): judge big steps near the region
+  double max_linear_speed{}, max_angular_speed{}, dt{};
+  bool position_limits{};
   std::vector<Limit> limits;
   std::vector<RateLimit> rate_limits;
-  double exact_rcond = 1e-12, dls_damping = 1e-2;
-  bool small = true;  // A and W square of size <= 3: the closed forms; else general.hpp
-  int rank_a = 3, rank_w = 3, rank_j = 6;  // generic ranks: c is sigma_rank / sigma_1
-  double pinv_rcond = 1e-10;
+  double exact_rcond{}, dls_damping{};
+  bool small{};  // A and W square of size <= 3: the closed forms; else general.hpp
+  int rank_j{}, rank_a{}, rank_w{};  // generic ranks (the field "ranks"): c is sigma_rank / sigma_1
+  double pinv_rcond{};
 };
 
 struct Blocks {

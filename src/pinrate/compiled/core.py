@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from types import ModuleType
 
 from ..errors import InputError
+from .boundary import disagreements
 
 ENVIRONMENT = "PINRATE_BACKEND"
 """``auto`` (the default: the core where it is importable), ``python`` (never the core) or
@@ -24,8 +25,9 @@ CHOICES = ("auto", "python", "compiled")
 CORE_MODULE = "pinrate_core"
 """The extension module's name."""
 
-CORE_ABI = 1
-"""The ``pinrate_core.ABI`` this pinrate speaks; a core of another ABI is not used."""
+CORE_ABI = 2
+"""The ``pinrate_core.ABI`` this pinrate speaks; a core of another ABI is not used, nor one
+whose constants or settings' fields differ from this pinrate's (:mod:`.boundary`)."""
 
 _choice: str | None = None  # set by use(); None: the environment decides
 _loaded: tuple[ModuleType | None, str] | None = None
@@ -70,6 +72,12 @@ def _import_core() -> tuple[ModuleType | None, str]:
             abi = getattr(module, "ABI", None)
             if abi != CORE_ABI:
                 why = f"pinrate_core speaks ABI {abi}, this pinrate {CORE_ABI}: rebuild it (pip install ./core)"
+                _loaded = (None, why)
+            elif found := disagreements(module):
+                why = (
+                    f"pinrate_core disagrees with this pinrate: {'; '.join(found)}: "
+                    "rebuild it from this pinrate's core/ (pip install ./core)"
+                )
                 _loaded = (None, why)
             else:
                 _loaded = (module, f"pinrate_core on Pinocchio {module.PINOCCHIO_VERSION}'s headers")

@@ -17,26 +17,8 @@ import pinocchio as pin
 
 from ..errors import UnsupportedByCoreError
 from ..kinematics.manipulator import Robot
+from .boundary import REBUILT_JOINTS
 from .core import core_module
-
-REBUILT_JOINTS = frozenset(
-    {
-        "JointModelRX",
-        "JointModelRY",
-        "JointModelRZ",
-        "JointModelRevoluteUnaligned",
-        "JointModelRUBX",
-        "JointModelRUBY",
-        "JointModelRUBZ",
-        "JointModelRevoluteUnboundedUnaligned",
-        "JointModelPX",
-        "JointModelPY",
-        "JointModelPZ",
-        "JointModelPrismaticUnaligned",
-    }
-)
-"""Pinocchio joint kinds the core rebuilds: every kind a URDF's revolute, continuous and
-prismatic joints become (a robot with any other runs on Python)."""
 
 _UNALIGNED = ("JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnaligned", "JointModelPrismaticUnaligned")
 

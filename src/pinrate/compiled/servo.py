@@ -1,12 +1,14 @@
-"""The compiled servo loop and ρ map: a controller's settings as plain numbers, handed to
-``pinrate_core.Servo`` (see ``core/src/servo.hpp`` for what the loop does and hands back)."""
+"""The compiled servo loop and ρ map: a controller's settings, set by name on a
+``pinrate_core.Settings`` and handed to ``pinrate_core.Servo`` (see ``core/src/servo.hpp`` for
+what the loop does and hands back)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import weakref
 from collections.abc import Callable, Hashable
-from dataclasses import dataclass
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -14,61 +16,28 @@ import numpy as np
 from ..errors import UnsupportedByCoreError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import pseudo_g_is_exact, square_and_small
-from ..solvers.singular import PINV_RCOND
+from .boundary import KERNELS, ServoSettings
 from .core import core_module
 from .kinematics import core_kinematics
 
-KERNELS = ("exact", "schur", "mca1", "mca2", "mca3", "dls")
-"""The algorithms in the core's order (``pinrate_core.KERNELS``)."""
 
+def core_settings(core: ModuleType, settings: ServoSettings) -> Any:
+    """A ``pinrate_core.Settings`` with each field of ``settings`` set by its name.
 
-@dataclass(frozen=True)
-class ServoSettings:
-    """What the compiled step needs of a :class:`~pinrate.control.Controller`.
-
-    Attributes:
-        rows: J's rows of the twist, partition order (m linear first), indices 0-5.
-        columns: velocity indices of the partition's joints, arm then wrist.
-        m, n_arm: linear rows, arm joints.
-        algorithm: a name of :data:`KERNELS`.
-        measured: the blocks the conditioning bound measures ("A", "W", "J").
-        row_scale: 1/L on linear rows, 1 on angular (m + k,).
-        slow_threshold: c under which a step is in the singular region (handed back).
-        watch, watch_factor, watched_step: the decelerate rule's one-step-ahead test.
-        max_linear_speed, max_angular_speed: m/s, rad/s (inf for none).
-        dt: s.
-        position_limits: keep q within the limits.
-        limits: rows (q index, v index, lower, upper) of the position limits (rad or m).
-        rate_limits: rows (v index, limit) of the velocity limits (rad/s or m/s).
-        exact_rcond, dls_damping: :mod:`pinrate.solvers.reference`'s constants.
-        small: A and W square of size <= 3 (the closed forms); else pseudo-inverses, which
-            needs A not tall and W not wide (ρ of the pseudo-inverse G is then the error map's).
-        ranks: the generic ranks of J, A and W (c is σ_rank / σ_1).
-        pinv_rcond: the pseudo-inverses' relative cut-off.
+    Raises:
+        UnsupportedByCoreError: the core's Settings has no field of that name (a core built
+            from other sources; the check at load names these too).
     """
-
-    rows: tuple[int, ...]
-    columns: tuple[int, ...]
-    m: int
-    n_arm: int
-    algorithm: str
-    measured: tuple[str, ...]
-    row_scale: tuple[float, ...]
-    slow_threshold: float
-    watch: bool
-    watch_factor: float
-    watched_step: float
-    max_linear_speed: float
-    max_angular_speed: float
-    dt: float
-    position_limits: bool
-    limits: tuple[tuple[int, int, float, float], ...]
-    rate_limits: tuple[tuple[int, float], ...]
-    exact_rcond: float
-    dls_damping: float
-    small: bool = True
-    ranks: tuple[int, int, int] = (6, 3, 3)
-    pinv_rcond: float = PINV_RCOND
+    filled = core.Settings()
+    for field in dataclasses.fields(settings):
+        try:
+            setattr(filled, field.name, getattr(settings, field.name))
+        except AttributeError:
+            raise UnsupportedByCoreError(
+                f"pinrate_core.Settings has no field {field.name!r} (ServoSettings.{field.name}): "
+                "rebuild it (pip install ./core)"
+            ) from None
+    return filled
 
 
 class CoreServo:
@@ -80,35 +49,13 @@ class CoreServo:
         core = core_module()
         if kinematics is None or core is None:
             raise UnsupportedByCoreError("the Python path is chosen")
+        if settings.algorithm not in KERNELS:
+            raise UnsupportedByCoreError(f"the compiled core has no kernel {settings.algorithm!r}")
         if settings.small and (len(settings.rows) - settings.m > 3 or settings.m > 3 or settings.n_arm > 3):
             raise UnsupportedByCoreError("the closed forms take blocks of at most 3x3")
         self.core = core
         self.settings = settings  # no reference to the robot: the caches keyed by it must let it go
-        self._servo = core.Servo(
-            kinematics,
-            list(settings.rows),
-            list(settings.columns),
-            settings.m,
-            settings.n_arm,
-            KERNELS.index(settings.algorithm),
-            list(settings.measured),
-            list(settings.row_scale),
-            settings.slow_threshold,
-            settings.watch,
-            settings.watch_factor,
-            settings.watched_step,
-            settings.max_linear_speed,
-            settings.max_angular_speed,
-            settings.dt,
-            settings.position_limits,
-            np.array(settings.limits, dtype=float).reshape(-1, 4),
-            np.array(settings.rate_limits, dtype=float).reshape(-1, 2),
-            settings.exact_rcond,
-            settings.dls_damping,
-            settings.small,
-            list(settings.ranks),
-            settings.pinv_rcond,
-        )
+        self._servo = core.Servo(kinematics, core_settings(core, settings))
 
     def run(self, q: np.ndarray, target: np.ndarray, *arguments: Any) -> tuple[int, int, float, float, int]:
         """The servo loop from ``q`` (see ``core/src/module.cpp``'s ``run_servo``):
@@ -123,7 +70,7 @@ class CoreServo:
 
     def solve_seconds(self, q: np.ndarray, twist: np.ndarray, algorithm: str, repeats: int) -> float:
         """Seconds per call of ``algorithm``'s solve alone (exact, mca1 or mca2) at q, in C++."""
-        return self._servo.solve_timing(q, np.ascontiguousarray(twist, dtype=float), KERNELS.index(algorithm), repeats)
+        return self._servo.solve_timing(q, np.ascontiguousarray(twist, dtype=float), algorithm, repeats)
 
 
 _servos: weakref.WeakKeyDictionary[Robot, dict[Hashable, CoreServo]] = weakref.WeakKeyDictionary()

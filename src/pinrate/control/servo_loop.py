@@ -50,6 +50,7 @@ import numpy as np
 
 from ..checks import check_count, check_positive
 from ..compiled import CoreServo
+from ..compiled.boundary import CLAMPED, RATE_LIMITED, SATURATED, STEP_FLAGS
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
@@ -364,7 +365,7 @@ class _Run:
         status = [_CORE_WORDS[flag] for flag in flags]
         details = [""] * taken
         for step_number, flag in enumerate(flags):
-            if flag & (_RATE_LIMITED | _CLAMPED):
+            if flag & (RATE_LIMITED | CLAMPED):
                 details[step_number] = self._core_detail(step_number, flag)
         for step_number, (word, detail) in self.steps.items():
             status[step_number], details[step_number] = word, detail
@@ -373,9 +374,9 @@ class _Run:
     def _core_detail(self, step_number: int, flag: int) -> str:
         """Controller._finish's detail of a step the core took."""
         parts = []
-        if flag & _RATE_LIMITED:
+        if flag & RATE_LIMITED:
             parts.append(f"rates scaled by {self.log.scale[step_number]:.3g} to meet the velocity limits")
-        if flag & _CLAMPED:
+        if flag & CLAMPED:
             limit = self.controller.position_limit(int(self.log.hit[step_number]))
             value = self.log.q[step_number + 1][limit.q_index]
             side, bound = ("lower", limit.lower) if value == limit.lower else ("upper", limit.upper)
@@ -404,17 +405,14 @@ class _Run:
         )
 
 
-_SATURATED, _RATE_LIMITED, _CLAMPED = 1, 2, 4  # pinrate_core.SATURATED, RATE_LIMITED, CLAMPED
-
-
 def _core_word(flag: int) -> str:
-    statuses = [Status.TWIST_SATURATED] if flag & _SATURATED else []
-    if flag & _RATE_LIMITED:
+    statuses = [Status.TWIST_SATURATED] if flag & SATURATED else []
+    if flag & RATE_LIMITED:
         statuses.append(Status.RATE_LIMITED)
-    if flag & _CLAMPED:
+    if flag & CLAMPED:
         statuses.append(Status.JOINT_LIMIT)
     return _STEP_WORDS.get(most_severe(*statuses), "moving")
 
 
-_CORE_WORDS = [_core_word(flag) for flag in range(8)]
+_CORE_WORDS = [_core_word(flag) for flag in range(2 * max(STEP_FLAGS.values()))]
 """The status word of a step the core took, by its flags."""

@@ -28,7 +28,9 @@ import numpy as np
 
 _SQRT3_HALF = math.sqrt(3.0) / 2.0
 _TWO_PI_THIRDS = 2.0 * math.pi / 3.0
-_FLAT = 1e-200
+FLAT = 1e-200
+"""Viète's cut: a 3x3 whose shifted p >= -FLAT has a triple root (rho is |tr M / 3|); the
+compiled core's ``FLAT`` must be the same (pinrate.compiled checks it at load)."""
 
 
 @dataclass(frozen=True)
@@ -116,9 +118,9 @@ def spectral_radius_3(m: tuple[Any, ...], ops: Ops) -> Any:
         return ops.maximum(ops.absolute(u + v + shift), ops.hypot(real_part, imaginary_part))
 
     def viete() -> Any:
-        # p <= 0 here; p = 0 only with q = 0, a triple root t = 0 (and a |p| below _FLAT
+        # p <= 0 here; p = 0 only with q = 0, a triple root t = 0 (and a |p| below FLAT
         # spreads the roots by less than 1e-100: rho is |s| to every digit).
-        flat = p >= -_FLAT
+        flat = p >= -FLAT
         safe_p = ops.where(one_real | flat, -1.0, p)
         radius = 2.0 * ops.sqrt(-safe_p * (1.0 / 3.0))
         angle = ops.arccos(ops.maximum(-1.0, ops.minimum(1.0, 3.0 * q / (safe_p * radius)))) * (1.0 / 3.0)
