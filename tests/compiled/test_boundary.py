@@ -18,6 +18,7 @@ from pinrate.compiled import boundary, core
 from pinrate.compiled.boundary import KERNELS, MEASURABLE, ServoSettings, disagreements
 from pinrate.compiled.kinematics import core_kinematics
 from pinrate.compiled.servo import core_settings
+from pinrate.control import compiled_twin
 from pinrate.control.controller import Controller
 from pinrate.control.singularity import measured_blocks
 from pinrate.errors import UnsupportedByCoreError
@@ -68,7 +69,7 @@ def test_each_setting_reaches_the_core_field_of_its_name(algorithm: str) -> None
     """A controller's settings, set by name, read back unchanged field by field (so no
     binding of one field writes another's member)."""
     robot = pinrate.load("ur5")
-    settings = Controller(robot, algorithm=algorithm, velocity_limits=None)._compiled_settings()
+    settings = compiled_twin.settings(Controller(robot, algorithm=algorithm, velocity_limits=None))
     settings = dataclasses.replace(settings, pinv_rcond=1.25e-10, dls_damping=0.0125, watch_factor=3.5)
     filled = core_settings(real_core(), settings)
     for field in dataclasses.fields(settings):
@@ -82,7 +83,7 @@ def test_each_setting_reaches_the_core_field_of_its_name(algorithm: str) -> None
 def test_a_servo_refuses_settings_with_a_field_unset() -> None:
     module = real_core()
     robot = pinrate.load("ur5")
-    settings = Controller(robot)._compiled_settings()
+    settings = compiled_twin.settings(Controller(robot))
     partial = module.Settings()
     for field in dataclasses.fields(settings):
         if field.name != "watched_step":
@@ -101,7 +102,7 @@ def test_a_settings_field_the_core_lacks_is_refused_by_name() -> None:
     class Wider(ServoSettings):
         elbow_gain: float = 0.5
 
-    settings = Wider(**dataclasses.asdict(Controller(pinrate.load("ur5"))._compiled_settings()))
+    settings = Wider(**dataclasses.asdict(compiled_twin.settings(Controller(pinrate.load("ur5")))))
     with pytest.raises(UnsupportedByCoreError, match=r"pinrate_core\.Settings has no field 'elbow_gain'"):
         core_settings(real_core(), settings)
 
