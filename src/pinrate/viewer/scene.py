@@ -47,6 +47,7 @@ from .server import MeshcatServer, check_reachable
 from .skeleton import Skeleton
 
 ROOT = "pinrate"
+"""The Meshcat path under which a Viewer draws the robot."""
 CONVERGING_COLOUR = 0x2CA02C  # ρ < 1
 DIVERGING_COLOUR = 0xD62728  # ρ >= 1
 TARGET_COLOUR = 0xFF7F0E
@@ -132,6 +133,9 @@ class RobotVisualizer(MeshcatVisualizer):
       docstring says why).
     * The names of the geometries it actually sent are kept in :attr:`drawn` (Pinocchio
       only warns about the others), so the viewer can draw the skeleton where a link has none.
+
+    Attributes:
+        drawn: the names of the geometries sent to the viewer.
     """
 
     viewer: meshcat.Visualizer  # set by initViewer
@@ -178,6 +182,11 @@ class Viewer:
         offline: no server: the scene is kept in this process (:attr:`scene`, a
             :class:`~.offline.SceneCommands`) for a page that builds it itself (the teleop
             console) or for :meth:`save_html`; :attr:`url` is "".
+
+    Attributes:
+        url: the page to open ("" when offline).
+        scene: the scene kept in this process when offline, None otherwise.
+        skeleton: the kinematic tree drawn for the links without a visual mesh.
     """
 
     def __init__(
@@ -349,7 +358,7 @@ class Viewer:
         realtime: bool = True,
         fps: float = 30.0,
     ) -> None:
-        """Animate a servo run: the path coloured by ρ, then the robot along it at ``speed``× real time."""
+        """Animate a servo run: the path coloured by ρ, then the robot along it at ``speed`` times real time."""
         if not isinstance(trajectory, Trajectory):
             raise InputError(f"play takes a Trajectory (what servo() returns), not {type(trajectory).__name__}")
         speed = check_positive(speed, "speed")
