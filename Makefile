@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 
-.PHONY: demo test core lint typecheck bench urdf docs screenshots clean
+.PHONY: demo test core lint typecheck bench urdf docs api screenshots clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -77,6 +77,13 @@ urdf: $(VENV)/.installed
 
 docs: $(VENV)/.installed
 	$(BIN)/pinrate paper > docs/paper-results.md
+
+# The API reference from the docstrings (docs/api, Sphinx) in build/api: warnings are errors
+# and every cross-reference must resolve (-n); -E rereads every docstring. make test checks
+# the same (tests/test_api_docs.py).
+api: $(VENV)/.installed
+	$(BIN)/sphinx-build -b html -E -W --keep-going -n -q docs/api build/api
+	@echo "pinrate: the API reference is build/api/index.html"
 
 # The pictures in docs/, in Chromium with Mesa's llvmpipe (docs/screenshots.py): look at them.
 screenshots: $(VENV)/.core

@@ -16,6 +16,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 __version__ = "0.2.0.dev0"
+"""pinrate's version (PEP 440): pyproject.toml reads it here; core/pyproject.toml repeats it."""
 
 # Public name -> the subpackage that defines it.
 _SOURCES = {

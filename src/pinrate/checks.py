@@ -117,9 +117,9 @@ def as_rng(rng: RngLike) -> np.random.Generator:
 def as_pose(target: object) -> pin.SE3:
     """A pose from a 4x4 homogeneous matrix or a pinocchio SE3; InputError otherwise.
 
-    The rotation must be orthonormal to 1e-6 (|R^T R - I| <= 1e-6 + 1e-5 |I| entrywise, as
+    The rotation must be orthonormal to 1e-6 (``|R^T R - I|`` <= 1e-6 + 1e-5 ``|I|`` entrywise, as
     ``np.allclose`` would judge) with det R > 0, and the last row [0, 0, 0, 1] (to 1e-8 +
-    1e-5 |b|). On Python floats: a servo call checks its target, and numpy's per-call cost
+    1e-5 ``|b|``). On Python floats: a servo call checks its target, and numpy's per-call cost
     on a 4x4 was most of the call's set-up.
     """
     if isinstance(target, pin.SE3):

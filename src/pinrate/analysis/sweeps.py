@@ -49,7 +49,7 @@ def sweep(
 
     The limit is the largest (ρ grows with the parameter) or smallest (ρ shrinks with it)
     value whose worst ρ on a dense grid of the joints J depends on stays below 1, found by
-    bisection (:func:`pinrate.design.largest_parameter`).
+    bisection (:func:`pinrate.analysis.design.largest_parameter`).
     """
     for bound in (low, high):
         if isinstance(bound, bool) or not isinstance(bound, numbers.Real):

@@ -37,7 +37,7 @@ INTERRUPTED = 130
 TERMINATED = 143
 BROKEN_PIPE = 141
 REDELIVERY_DELAY = 0.01
-"""Seconds before a swallowed signal is sent again (see :class:`_Signals`)."""
+"""Seconds before a swallowed signal is sent again (see ``_Signals``)."""
 
 
 class Terminated(SystemExit):

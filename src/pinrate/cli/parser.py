@@ -3,7 +3,7 @@
 Parsing imports nothing heavy: ``pinrate --help``, ``pinrate demo --help`` and a refused
 argument answer before numpy, Pinocchio or matplotlib load (issue 20); each subcommand's
 module (:mod:`.robot_list`, :mod:`.demo`, :mod:`.analyze`, :mod:`.paper_results`,
-:mod:`.teleop`) is imported by :func:`.entry.main` once the arguments are parsed. So the
+:mod:`~pinrate.cli.teleop`) is imported by :func:`.entry.main` once the arguments are parsed. So the
 choices the parser offers are copies of the tuples that define them in the lower layers,
 which import numpy; the CLI's tests check every copy against its source.
 """

@@ -162,7 +162,7 @@ class CollisionMonitor:
         )
 
     def approach_rates(self, q: np.ndarray, joint_rates: np.ndarray, indices: list[int]) -> np.ndarray:
-        """ḋ (m/s) of the pairs ``indices`` under ``joint_rates``, after :meth:`_distances` at q."""
+        """ḋ (m/s) of the pairs ``indices`` under ``joint_rates``, after ``_distances`` at q."""
         model, data = self._model, self._data
         pin.computeJointJacobians(model, data, q)
         objects = self._geometry.geometryObjects

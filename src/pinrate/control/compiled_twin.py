@@ -42,7 +42,7 @@ COMPILED_COVERAGE: dict[str, Coverage] = {
 }
 """The compiled core's allow-list: every ``Controller`` option with whether the core covers it
 at a controller's value. A test keeps its keys equal to ``Controller``'s parameters; an option
-added without an entry keeps its controllers on Python (:meth:`Controller.compiled_reason`)."""
+added without an entry keeps its controllers on Python (:meth:`.Controller.compiled_reason`)."""
 
 
 def twin(controller: Any, options: tuple[str, ...]) -> CoreServo | None:

@@ -96,7 +96,7 @@ class Elbow:
     reach: float
 
     def gain(self, region: float) -> float:
-        """|K3| of eq. 45 (rad per m) for a region of ``region`` rad: d_s / (ES d_e sin β_r),
+        """``|K3|`` of eq. 45 (rad per m) for a region of ``region`` rad: d_s / (ES d_e sin β_r),
         the elbow rate per m/s that retracts the wrist centre at the commanded speed at the
         region's edge (the wrist centre's distance from the shoulder axis is
         r(β)² = ES² + d_e² + 2 ES d_e cos β, so dr/dβ = -ES d_e sin β / r)."""

@@ -10,11 +10,11 @@ saturated to ``max_linear_speed`` (m/s) and ``max_angular_speed`` (rad/s), turne
 joint rates by the algorithm and integrated over ``dt`` (see :mod:`.controller`).
 
 On the Theorem: with ``gain * dt = 1`` the sensor commands the whole error each sample and
-the error of MCA1 maps as e <- G e (eq. 40 with β = 1), so |λ(G)| < 1 is the exact test.
-With smaller ``gain * dt`` the step is e <- (I - gain dt (I - G)) e: |λ| < 1 remains
+the error of MCA1 maps as e <- G e (eq. 40 with β = 1), so ``|λ(G)|`` < 1 is the exact test.
+With smaller ``gain * dt`` the step is e <- (I - gain dt (I - G)) e: ``|λ|`` < 1 remains
 sufficient, and only Re λ < 1 is needed as gain dt -> 0.
 
-Stop rules, on the error measure e = |position error| + |rotation error| (m + rad, the two
+Stop rules, on the error measure e = ``|position error|`` + ``|rotation error|`` (m + rad, the two
 norms ``tol`` applies to):
 
 - **converged**: both norms below ``tol``.

@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 PARALLEL = 1e-6
-"""|a × b| (or 1 - (a · b)²) under this: two unit axes are parallel."""
+"""``|a × b|`` (or 1 - (a · b)²) under this: two unit axes are parallel."""
 
 Axis = tuple[int, tuple[float, float, float]]
 """A revolute joint: its Pinocchio id and its unit axis in its own joint frame."""

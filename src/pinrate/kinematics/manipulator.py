@@ -74,6 +74,8 @@ class Robot:
         reference_configurations: named configurations (from the SRDF, plus ``"home"``).
         home_choice: where :meth:`home` comes from (a reference, an SRDF state, a search, neutral).
         srdf_path: the SRDF read with the URDF (its disabled collision pairs, its poses), or None.
+        hand_joints: the gripper and hand joints (mimic, mimicked, zero-range) that the default
+            tip and the automatic partition leave out.
     """
 
     def __init__(

@@ -28,7 +28,7 @@ _INDEX_CACHE: weakref.WeakKeyDictionary[Robot, dict[Partition, PartitionIndex]] 
 _AUTO_CACHE: weakref.WeakKeyDictionary[Robot, Partition] = weakref.WeakKeyDictionary()
 
 Selector = tuple[Any, Any]
-"""An index of J[rows, columns]: two slices, or np.ix_ index arrays."""
+"""An index of J[rows, columns]: two slices, or ``np.ix_`` index arrays."""
 
 
 def selector(rows: list[int], columns: list[int]) -> Selector:

@@ -86,5 +86,5 @@ def hand_twist(robot: Robot, q: np.ndarray, tvel: np.ndarray, rvel: np.ndarray |
 
 
 def relative_deviation(found: np.ndarray, expected: np.ndarray) -> float:
-    """max |found - expected| over max(1, max |expected|): a rate's error relative to the rates' size."""
+    """max ``|found - expected|`` over max(1, max ``|expected|``): a rate's error relative to the rates' size."""
     return float(np.abs(found - expected).max() / max(1.0, float(np.abs(expected).max())))

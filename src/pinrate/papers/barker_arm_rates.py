@@ -30,7 +30,7 @@ What the reduction is, measured against the Moore-Penrose solution of eq. 38:
   arm) M* TVEL^ and the reduction are the same: both are exact, and among the exact solutions
   both take the one with (theta2, theta3) orthogonal to (F4, -F3), the least norm. For a
   TVEL^ with a component along the arm (which no joint rate produces) they differ: M*
-  minimises |M x - TVEL^| in base axes, M1* minimises |M1 y - g1| in the units of g1, and
+  minimises ``|M x - TVEL^|`` in base axes, M1* minimises ``|M1 y - g1|`` in the units of g1, and
   eq. 39 then sets theta1 exactly.
 * S2 ES + F5 = 0 (F1 = 0, the wrist centre at its least radius from Z0): M's null vector is
   (F3, F2, 0), which moves theta1. M1 = [[0, 0], [0, -F5]]: M1* gives theta2 = 0 and eq. 39
@@ -90,7 +90,7 @@ def arm_rates_as_printed(q: np.ndarray, tvel: np.ndarray, parameters: Mapping[st
 
 
 def arm_rates_deviation(count: int = 100, **lengths: float) -> float:
-    """max relative |step's arm rates - eq. 34-37| over random q off the singular region
+    """max relative ``|step's arm rates - eq. 34-37|`` over random q off the singular region
     (c >= 0.05) and random twists, for ``algorithm="mca1"`` and ``"mca2"`` (B = 0 here)."""
     robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
     generator = np.random.default_rng(12)
@@ -106,7 +106,7 @@ def arm_rates_deviation(count: int = 100, **lengths: float) -> float:
 
 
 def printed_arm_rates_error(count: int = 100) -> float:
-    """max relative |eq. 34-36 as printed - M^-1 TVEL^| over random q and TVEL^ (the misprints' size)."""
+    """max relative ``|eq. 34-36 as printed - M^-1 TVEL^|`` over random q and TVEL^ (the misprints' size)."""
     robot = robots.barker_arm()
     generator = np.random.default_rng(14)
     worst = 0.0
@@ -165,12 +165,12 @@ class SingularCase:
 
     @property
     def step_error(self) -> float:
-        """|M x - TVEL^| of the step's arm rates, m/s."""
+        """``|M x - TVEL^|`` of the step's arm rates, m/s."""
         return float(np.linalg.norm(barker_m(self.q) @ self.step_rates - self.tvel))
 
     @property
     def reduction_error(self) -> float:
-        """|M x - TVEL^| of the reduction's rates, m/s."""
+        """``|M x - TVEL^|`` of the reduction's rates, m/s."""
         return float(np.linalg.norm(barker_m(self.q) @ self.reduction - self.tvel))
 
 
@@ -190,7 +190,7 @@ def singular_case(which: int, along: float = 0.0, algorithm: str = "mca2") -> Si
 
 
 def generalized_inverse_deviation() -> float:
-    """max |step's arm rates - M* TVEL^ (eq. 38)| (rad/s) at both arm singularities, feasible
+    """max ``|step's arm rates - M* TVEL^ (eq. 38)|`` (rad/s) at both arm singularities, feasible
     and infeasible commands, ``algorithm="mca1"`` and ``"mca2"``."""
     return max(
         float(np.abs(case.step_rates - case.generalized).max())
@@ -241,7 +241,7 @@ def reduction_2x2(
 
 
 def reduction_deviation(count: int = 100) -> float:
-    """max relative |step's arm rates (mca2) - eq. 39-44 with M1^-1| over random q off the
+    """max relative ``|step's arm rates (mca2) - eq. 39-44 with M1^-1|`` over random q off the
     singular region (c >= 0.05) and random twists."""
     robot = robots.barker_arm()
     controller = unlimited_controller(robot, "mca2")
@@ -259,7 +259,7 @@ THETA1_ZERO_Q = np.array([0.0, 0.4, 0.8, 0.1, 0.6, 0.0])
 
 
 def reduction_at_theta1_zero() -> tuple[float, float, float]:
-    """(c of the controller's measured blocks, |det M1|, reduction's |M x - TVEL^| in m/s) at
+    """(c of the controller's measured blocks, ``|det M1|``, reduction's ``|M x - TVEL^|`` in m/s) at
     :data:`THETA1_ZERO_Q` for TVEL^ = :data:`REFERENCE_TVEL`, M1* cutting under the
     controller's ``singular_threshold``: the reduction drops TVEL^2."""
     robot = robots.barker_arm()

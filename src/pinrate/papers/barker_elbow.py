@@ -68,7 +68,7 @@ def upper_arm_components_as_printed(
 
 
 def upper_arm_component_errors(count: int = 100) -> tuple[float, float, float]:
-    """Eq. B28-B29 against the robot, over random q and unit base-axes TVEL^: max |error| (m/s
+    """Eq. B28-B29 against the robot, over random q and unit base-axes TVEL^: max ``|error|`` (m/s
     per m/s) of (derived, as printed, printed with only the bracket mended), the robot's
     components being TVEL^ . X2 and TVEL^ . Y2 with X2 the unit vector from the shoulder
     (joint theta2) to the elbow (joint theta3) across the theta2 axis and Y2 = z1 x X2, z1
@@ -104,7 +104,7 @@ ELBOW_CASES = ((0.3, 0.4), (-1.1, 1.2), (2.0, -0.7))
 def auxiliary_elbow_deviation(seed: int = 7) -> tuple[float, float]:
     """(relative deviation of θ3 from eq. 45, of θ2 from eq. 46) over commands along X2 and Y2 at
     θ3 = 0 (:data:`ELBOW_CASES`), ``singularity="auxiliary_elbow"``, K2 = 1 and
-    |K3| = (WE + ES) / (ES WE sin β_r) (pinrate's gain, β_r the controller's elbow region);
+    ``|K3|`` = (WE + ES) / (ES WE sin β_r) (pinrate's gain, β_r the controller's elbow region);
     the sign of K3 bends the elbow the way of the home's θ3."""
     robot = robots.barker_arm()
     parameters = robots.parameters("barker_arm")

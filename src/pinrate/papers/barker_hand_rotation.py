@@ -83,8 +83,8 @@ def hand_to_base(
 
 
 def hand_to_base_errors(count: int = 100, **lengths: float) -> tuple[float, float, float]:
-    """Eq. B1-B24 against the robot, over random q: (max |L - R_hand| with P2 = -S23, the same
-    with P2 as printed, max |B4 as printed - B4| entrywise), R_hand the robot's hand rotation
+    """Eq. B1-B24 against the robot, over random q: (max ``|L - R_hand|`` with P2 = -S23, the same
+    with P2 as printed, max ``|B4 as printed - B4|`` entrywise), R_hand the robot's hand rotation
     (``robot.frame_pose(q, "hand")``); all dimensionless."""
     robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
     derived = printed = b4 = 0.0

@@ -92,7 +92,7 @@ def wrist_centre_from_shoulder(q: np.ndarray, parameters: Mapping[str, float] | 
 
 # ---------------------------------------------------------------------- eq. D9, det M
 def barker_det_deviation(count: int = 300, **lengths: float) -> float:
-    """max |det A - eq. D9| / (1 + |eq. D9|), with (S2 ES + F5)(SAL3 WE S3 + A3 C3) ES."""
+    """max ``|det A - eq. D9|`` / (1 + ``|eq. D9|``), with (S2 ES + F5)(SAL3 WE S3 + A3 C3) ES."""
     robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
     parameters = robots.parameters("barker_arm") | lengths
     es, we, a3 = parameters["es"], parameters["we"], parameters["a3"]
@@ -163,7 +163,7 @@ def singularities_row() -> Result:
 
 # ---------------------------------------------------------------------- eq. 25-31 against the robot
 def m_deviation(count: int = 100, **lengths: float) -> float:
-    """max |R_hand A - M| (m) over random q: the robot's arm block in base axes against eq. 26."""
+    """max ``|R_hand A - M|`` (m) over random q: the robot's arm block in base axes against eq. 26."""
     robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
     worst = 0.0
     for q in robot.sample_configurations(count, 11):

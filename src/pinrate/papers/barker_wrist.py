@@ -128,7 +128,7 @@ def barker_wrist_deviation(count: int = 200, *, solver: RateSolver | None = None
         theta5 + C4 D5 + S4 D4 (eq. 49),   S5 theta6 + S4 D5 - C4 D4 (eq. 50),
         theta4 + C5 theta6 - SAL3 D3 + CAL3 D2 (eq. 51),
 
-    each over max(1, max |rate|) (rad/s). It is rounding for rates that realise the commanded
+    each over max(1, max ``|rate|``) (rad/s). It is rounding for rates that realise the commanded
     RVEL; wrong wrist (or arm) rates leave it at their error.
     """
     robot = robots.barker_arm(**lengths)  # type: ignore[arg-type]  # lengths holds no tip or sensor
@@ -189,7 +189,7 @@ def _wrist_step(rule: str, q: np.ndarray, twist: np.ndarray) -> tuple[Step, np.n
 
 
 def wrist_generalized_inverse_deviation(count: int = 100) -> tuple[float, float]:
-    """(off theta5 = 0, at theta5 = 0): max |step's wrist rates - eq. 49, 60| (rad/s), mca2.
+    """(off theta5 = 0, at theta5 = 0): max ``|step's wrist rates - eq. 49, 60|`` (rad/s), mca2.
 
     Off: random q off the singular region (c >= 0.05), random twists, M2* = M2^-1. At:
     :data:`WRIST_SINGULAR_Q` and :data:`WRIST_TWIST`, ``wrist="split"``. RVEL~ (eq. 48) from
@@ -238,8 +238,8 @@ def wrist_generalized_inverse_row() -> Result:
 
 
 def wrist_rule_deviations() -> dict[str, float]:
-    """Per rule (eq. 61 split, 62 hold_first, 63 last_then_first): max |step's wrist rates -
-    the rule's closed form| (rad/s) at :data:`WRIST_SINGULAR_Q` for :data:`WRIST_TWIST`, mca2."""
+    """Per rule (eq. 61 split, 62 hold_first, 63 last_then_first): max ``|step's wrist rates -
+    the rule's closed form|`` (rad/s) at :data:`WRIST_SINGULAR_Q` for :data:`WRIST_TWIST`, mca2."""
     robot = robots.barker_arm()
     deviations = {}
     for rule in WRIST_RULES:

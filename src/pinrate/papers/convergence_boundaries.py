@@ -20,7 +20,7 @@ from .table import Result, deviation_text, row
 
 # ---------------------------------------------------------------------- §5.1 polar
 def polar_G_deviation(count: int = 500) -> float:
-    """max |G - l C3 / (d2 + l C3)| (eq. 56), l = 0.2."""
+    """max ``|G - l C3 / (d2 + l C3)|`` (eq. 56), l = 0.2."""
     robot = robots.planar_polar()
 
     def deviation(q: np.ndarray) -> float:
@@ -80,7 +80,7 @@ def polar_rule_row() -> Result:
 
 # ---------------------------------------------------------------------- §5.2 SCARA
 def scara_G_deviation(count: int = 500) -> float:
-    """max |G - l3 S23 / (l2 S2 + l3 S23)| (eq. 60), relative, l1 = l2 = l3 = 0.4."""
+    """max ``|G - l3 S23 / (l2 S2 + l3 S23)|`` (eq. 60), relative, l1 = l2 = l3 = 0.4."""
     robot = robots.scara()
 
     def deviation(q: np.ndarray) -> float:

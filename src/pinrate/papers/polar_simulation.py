@@ -5,14 +5,14 @@ reading tried (TCP or wrist point, absolute or relative orientation); the simula
 from poses built to have the printed λ values (:func:`polar_pose_with_lambda`).
 
 What the figure's statement measures (read from the text, computed as read): Fig. 6(b), "the
-convergence condition is not fulfilled and the trajectory diverges": |λ| = 1.5 > 1 at the
+convergence condition is not fulfilled and the trajectory diverges": ``|λ|`` = 1.5 > 1 at the
 start (the target's -0.9 is inside). The dead-beat MCA2 iteration (the Theorem's setting)
 first moves away (the servo's divergence stop fires at step 4), then, without joint limits,
 crosses G's pole d2 + l C3 = 0, takes d2 through 0 and converges on the mirror branch d2 < 0
 (theta1 - 180°, theta3 + 180°: the same pose), which the robot's stroke (d2 >= 0.05 m) and the
 paper's d2 > 0 exclude; with the limits held it stops at d2 = 0.05 m, theta3 = 180° short of
 the target (:func:`fig6b_continued`). So the figure's outcome holds on the robot, while
-|λ| > 1 at the start alone does not make the iteration diverge: the Theorem's condition is
+``|λ|`` > 1 at the start alone does not make the iteration diverge: the Theorem's condition is
 sufficient, not necessary.
 """
 
@@ -71,7 +71,7 @@ def fig6a_row() -> Result:
 
 def fig6b_continued(max_steps: int = 2000) -> tuple[Continuation, Continuation]:
     """Fig. 6(b)'s dead-beat MCA2 past the servo's divergence stop: (without joint limits,
-    with the URDF's limits held: 0.05 <= d2 <= 1 m, |theta1|, |theta3| <= 180°)."""
+    with the URDF's limits held: 0.05 <= d2 <= 1 m, ``|theta1|``, ``|theta3|`` <= 180°)."""
     robot = robots.planar_polar()
     q0, q_target = fig6_poses("b")
     return (

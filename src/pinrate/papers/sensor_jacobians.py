@@ -25,7 +25,7 @@ from .table import Result, deviation_text, row, yes_no
 
 # ---------------------------------------------------------------------- eq. 10, 13, 16
 def two_link_deviation(count: int = 200) -> float:
-    """max |J_linear - eq. 10| over random configurations (l1 = 0.7, l2 = 0.45)."""
+    """max ``|J_linear - eq. 10|`` over random configurations (l1 = 0.7, l2 = 0.45)."""
     l1, l2 = 0.7, 0.45
     robot = robots.two_link_planar(l1=l1, l2=l2)
 
@@ -48,7 +48,7 @@ def two_link_row() -> Result:
 
 
 def cylindrical_deviation(count: int = 200) -> float:
-    """max |J_linear - diag(d3, 1, 1)| (eq. 13)."""
+    """max ``|J_linear - diag(d3, 1, 1)|`` (eq. 13)."""
     robot = robots.cylindrical()
     return max(
         float(np.abs(robot.jacobian(q)[:3] - np.diag([q[2], 1, 1])).max())
@@ -68,7 +68,7 @@ def cylindrical_row() -> Result:
 
 
 def spherical_deviation(count: int = 200) -> float:
-    """max |J_linear - diag(d3 C2, d3, 1)| (eq. 16)."""
+    """max ``|J_linear - diag(d3 C2, d3, 1)|`` (eq. 16)."""
     robot = robots.spherical()
     return max(
         float(np.abs(robot.jacobian(q)[:3] - np.diag([q[2] * math.cos(q[1]), q[2], 1])).max())
@@ -165,7 +165,7 @@ def max_abs_B(robot: Robot, count: int = 100) -> float:
 
 
 def mca2_minus_exact(robot: Robot, count: int = 50) -> float:
-    """max |mca2 - exact| over random configurations and twists."""
+    """max ``|mca2 - exact|`` over random configurations and twists."""
     generator = np.random.default_rng(1)
     worst = 0.0
     for q in robot.sample_configurations(count, 2):

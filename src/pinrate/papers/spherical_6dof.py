@@ -28,8 +28,8 @@ What the paper's statement measures (read from the text, computed as read):
 * S&K §5.3's "at least within 50 percent of the work volume convergence always exists"
   is about the (theta2, theta5) square (-90°, 90°)² with theta4 free ("always": for every
   theta4): K = C2 C5 - S2 C4 S5 is affine in C4, so eq. 72 holds for every theta4 iff
-  C2 C5 > |S2 S5|, i.e. cos(|theta2| + |theta5|) > 0, |theta2| + |theta5| < 90°: exactly
-  half the square. At one theta4 with C4 = ±1 it is |theta2 ± theta5| < 90°, 3/4 of it
+  C2 C5 > ``|S2 S5|``, i.e. cos(``|theta2|`` + ``|theta5|``) > 0, ``|theta2|`` + ``|theta5|`` < 90°: exactly
+  half the square. At one theta4 with C4 = ±1 it is ``|theta2 ± theta5|`` < 90°, 3/4 of it
   (the paper's "much larger" effective work volume when C4 does not take both values).
 """
 
@@ -78,7 +78,7 @@ def spherical_6dof_eigenvalues(q: np.ndarray, l: float) -> np.ndarray:  # noqa: 
 
 
 def spherical_6dof_deviations(count: int = 300) -> tuple[float, float]:
-    """(max |J - corrected eq. 70|, max eigenvalue mismatch of G)."""
+    """(max ``|J - corrected eq. 70|``, max eigenvalue mismatch of G)."""
     robot = robots.spherical_6dof()
     l = 0.1  # noqa: E741
     worst_jacobian = worst_eigen = 0.0
@@ -139,7 +139,7 @@ def spherical_6dof_printed_G(q: np.ndarray, l: float, *, d3_sign_33: float = 1.0
 def printed_eq71_errors(count: int = 300) -> tuple[float, float, float]:
     """Eq. 71 against G = U A^-1 B W^-1 of the printed eq. 70 (pinrate's
     :func:`convergence_from_blocks` on its blocks), over random q of the six-DOF robot, each
-    error relative to max(1, |G|): (max over the entries other than (3, 3), max at (3, 3) as
+    error relative to max(1, ``|G|``): (max over the entries other than (3, 3), max at (3, 3) as
     printed, max at (3, 3) with its d3 term's sign changed)."""
     robot = robots.spherical_6dof()
     l = 0.1  # noqa: E741
@@ -194,7 +194,7 @@ def spherical_6dof_work_volume(count: int = 20000, seed: int = 12) -> WorkVolume
     ``count`` configurations drawn uniformly in the robot's joint limits (theta2, theta5 in
     (-90°, 90°), the paper's assumptions C2 > 0 and -90° < theta5 < 90°; d3 in [0.3, 0.8] m
     > 2 l). Eq. 72 holds for every theta4 where K > 0 at C4 = +1 and at C4 = -1 (K is affine in
-    C4): the share of those samples estimates the area of |theta2| + |theta5| < 90° over the
+    C4): the share of those samples estimates the area of ``|theta2|`` + ``|theta5|`` < 90° over the
     square, 1/2. ``sufficient``: at each such sample pinrate's ρ (:func:`spectral_radius_at`,
     the corrected eq. 70) is below 1 at the sample's theta4 and at theta4 = 0 and 180°.
     """

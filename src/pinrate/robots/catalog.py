@@ -7,17 +7,19 @@ Two kinds of names:
 * serial arms shipped by ``example-robot-data`` (6.x ships data only: the URDFs and meshes
   sit under ``cmeel.prefix/share/example-robot-data/robots/``).
 
-| name   | URDF (example-robot-data)                    | default tip            | home          |
-|--------|----------------------------------------------|------------------------|---------------|
-| ur3    | ur_description/urdf/ur3_robot.urdf           | tool0                  | table below   |
-| ur5    | ur_description/urdf/ur5_robot.urdf           | tool0                  | table below   |
-| ur10   | ur_description/urdf/ur10_robot.urdf          | tool0                  | table below   |
-| panda  | panda_description/urdf/panda.urdf            | panda_hand_tcp         | SRDF default  |
-| z1     | z1_description/urdf/z1.urdf                  | gripperStator (link)   | arm_up, bent  |
-| xarm7  | xarm_description/urdf/xarm7.urdf             | link_eef               | hold-up, bent |
-| so100  | so_arm_description/urdf/so100.urdf           | gripper (link)         | table below   |
-| so101  | so_arm_description/urdf/so101.urdf           | gripper_frame_link     | table below   |
-| kinova | kinova_description/robots/kinova.urdf        | j2s6s200_end_effector  | SRDF arm_up   |
+The names of example-robot-data's arms::
+
+    | name   | URDF (example-robot-data)                    | default tip            | home          |
+    |--------|----------------------------------------------|------------------------|---------------|
+    | ur3    | ur_description/urdf/ur3_robot.urdf           | tool0                  | table below   |
+    | ur5    | ur_description/urdf/ur5_robot.urdf           | tool0                  | table below   |
+    | ur10   | ur_description/urdf/ur10_robot.urdf          | tool0                  | table below   |
+    | panda  | panda_description/urdf/panda.urdf            | panda_hand_tcp         | SRDF default  |
+    | z1     | z1_description/urdf/z1.urdf                  | gripperStator (link)   | arm_up, bent  |
+    | xarm7  | xarm_description/urdf/xarm7.urdf             | link_eef               | hold-up, bent |
+    | so100  | so_arm_description/urdf/so100.urdf           | gripper (link)         | table below   |
+    | so101  | so_arm_description/urdf/so101.urdf           | gripper_frame_link     | table below   |
+    | kinova | kinova_description/robots/kinova.urdf        | j2s6s200_end_effector  | SRDF arm_up   |
 
 The UR arms' all-zero pose is singular (wrist and shoulder singular at once), so their home
 is the non-singular ``[0, -pi/2, pi/2, -pi/2, -pi/2, 0]``; example-robot-data ships no UR
@@ -136,6 +138,7 @@ EXAMPLE_ROBOTS: dict[str, CatalogEntry] = {
         ),
     )
 }
+"""example-robot-data's arms that pinrate knows by name (the table above), by name."""
 
 
 @functools.cache

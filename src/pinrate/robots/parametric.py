@@ -30,7 +30,7 @@ printed matrix; the tests check every one against its closed form):
   P; sensor at P on the third link (z radial, x along the theta2 axis); TCP at tool length l
   beyond P along the theta6 axis (a frame ``wrist_centre`` at P on the last link gives
   B = 0). -90° < theta5 < 90° as in §5.3. Eq. 70's printed second column is a misprint: see
-  :mod:`pinrate.paper_results`.
+  :mod:`pinrate.papers.spherical_6dof`.
 * ``barker_arm`` (Barker appendix A): the DH table with NO, ES, SN, WE, HW and alpha3, a3,
   r3. URDF link i is DH frame i-1 turned by theta_i about z_{i-1}; the next joint's origin
   is Rz(offset_i) Tz(r_i) Tx(a_i) Rx(alpha_i), so theta'_i = theta_i + offset_i as in the
@@ -262,6 +262,7 @@ _GENERATORS: dict[str, Callable[..., _Design]] = {
 }
 
 ROBOT_NAMES: tuple[str, ...] = tuple(_GENERATORS)
+"""The papers' robots this module builds, by name (each also a function of its own)."""
 
 
 def _generator(name: str) -> Callable[..., _Design]:

@@ -64,7 +64,7 @@ def inverse(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def matrix_spectral_radius(M: np.ndarray) -> np.ndarray:
-    """max |eigenvalue| of each matrix of a stack (N, n, n); 0 for n = 0 (numpy above 3)."""
+    """max ``|eigenvalue|`` of each matrix of a stack (N, n, n); 0 for n = 0 (numpy above 3)."""
     count, n, _ = M.shape
     if n == 0:
         return np.zeros(count)

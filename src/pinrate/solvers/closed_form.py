@@ -128,7 +128,7 @@ Kernel = Callable[[Matrix, Matrix, Matrix, Matrix, Vector, Vector], tuple[Vector
 
 def blocks(jacobian: np.ndarray, selectors: tuple[Any, ...]) -> Blocks:
     """(A, B, U, W) of eq. 19 as nested lists, from the sensor-frame Jacobian (6, nv) and the
-    partition's selectors (:attr:`pinrate.kinematics.PartitionIndex.selectors`)."""
+    partition's selectors (``selectors`` of :class:`pinrate.kinematics.PartitionIndex`)."""
     a, b, u, w = selectors
     return jacobian[a].tolist(), jacobian[b].tolist(), jacobian[u].tolist(), jacobian[w].tolist()
 

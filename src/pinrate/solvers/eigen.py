@@ -74,14 +74,14 @@ ARRAYS = Ops(np.sqrt, np.cbrt, np.arccos, np.cos, np.hypot, np.maximum, np.minim
 
 
 def spectral_radius_1(a: Any, ops: Ops) -> Any:
-    """max |λ| of [[a]]."""
+    """max ``|λ|`` of [[a]]."""
     return ops.absolute(a)
 
 
 def spectral_radius_2(a: Any, b: Any, c: Any, d: Any, ops: Ops) -> Any:
-    """max |λ| of [[a, b], [c, d]]: λ = (a + d)/2 ± sqrt(D), D = ((a - d)/2)^2 + b c.
+    """max ``|λ|`` of [[a, b], [c, d]]: λ = (a + d)/2 ± sqrt(D), D = ((a - d)/2)^2 + b c.
 
-    Real roots (D >= 0): |(a + d)/2| + sqrt(D); a complex pair: |λ|^2 = det = a d - b c.
+    Real roots (D >= 0): ``|(a + d)/2|`` + sqrt(D); a complex pair: ``|λ|^2`` = det = a d - b c.
     """
     half_difference = (a - d) * 0.5
     discriminant = half_difference * half_difference + b * c
@@ -91,7 +91,7 @@ def spectral_radius_2(a: Any, b: Any, c: Any, d: Any, ops: Ops) -> Any:
 
 
 def spectral_radius_3(m: tuple[Any, ...], ops: Ops) -> Any:
-    """max |λ| of the 3x3 matrix with row-major entries ``m`` (nine numbers or arrays).
+    """max ``|λ|`` of the 3x3 matrix with row-major entries ``m`` (nine numbers or arrays).
 
     With s = tr M / 3 and S = M - s I (trace 0), λ = t + s where t³ + p t + q = 0,
     p = the sum of S's principal 2x2 minors and q = -det S. One real root and a complex

@@ -47,7 +47,7 @@ THEOREM_ALGORITHMS = ("mca1", "mca2", "mca3")
 """The algorithms the Theorem is about; for the others ρ says nothing about convergence."""
 
 MARGINAL = 1e-9
-"""|ρ − 1| up to which ρ is reported as exactly 1: an eigenvalue 1 is structural (a direction
+"""``|ρ − 1|`` up to which ρ is reported as exactly 1: an eigenvalue 1 is structural (a direction
 the algorithm's blocks never correct), and rounding must not turn it into "converges"."""
 
 
@@ -59,7 +59,7 @@ class ErrorMap:
         matrix: I − J K (r x r, task space) when r <= n, else I − K J (n x n, joint space).
         space: "task" or "joint", which of the two ``matrix`` is.
         eigenvalues: of ``matrix``.
-        spectral_radius: the largest |eigenvalue| (0.0 for an empty map).
+        spectral_radius: the largest ``|eigenvalue|`` (0.0 for an empty map).
         coupling: (‖(I − J K)[angular, linear]‖₂ in rad/m, ‖(I − J K)[linear, angular]‖₂ in
             m/rad): how much of a linear command becomes angular error and the reverse
             (MCA1: ‖U A⁻¹‖, 0; MCA2: 0, ‖B W⁻¹‖; MCA3, exact: 0, 0 for square blocks).

@@ -197,7 +197,7 @@ def smaller_eigenvalues(G: np.ndarray, H: np.ndarray) -> np.ndarray:
 
 
 def spectral_radius(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> float:
-    """ρ, the largest |eigenvalue| of G and H (eq. 32, 50), 0.0 when there is none.
+    """ρ, the largest ``|eigenvalue|`` of G and H (eq. 32, 50), 0.0 when there is none.
 
     Raises:
         SingularBlockError: A or W is square and singular.

@@ -62,6 +62,7 @@ REGISTRY: dict[str, Algorithm] = {
         Algorithm("dls", "damped least squares, finite everywhere", whole=reference.dls),
     )
 }
+"""Every algorithm by name: its summary and its solvers (numpy, and closed form where it has one)."""
 
 ALGORITHMS: tuple[str, ...] = tuple(REGISTRY)
 """Every algorithm name, in the order the papers introduce them (``exact`` first)."""

@@ -1,10 +1,10 @@
 """The one singularity rule of pinrate, for every square block it inverts.
 
-A square block M is singular when
+A square block M is singular when::
 
     |det M| <= SINGULAR_RATIO * prod_j ||M[:, j]||                       (Hadamard)
 
-Hadamard's inequality bounds |det M| by the product of the column norms, so the ratio is
+Hadamard's inequality bounds ``|det M|`` by the product of the column norms, so the ratio is
 in [0, 1] whatever the units of the columns (metres per radian, radians per metre): 1 for
 orthogonal columns, 0 for dependent ones. The numpy reference, the closed-form kernels on
 Python floats and the batched kernels on stacks all decide with :func:`invertible`.
@@ -19,11 +19,12 @@ import numpy as np
 from ..errors import InputError
 
 SINGULAR_RATIO = 1e-10
-"""A square block is singular when |det M| <= SINGULAR_RATIO * prod of its column norms."""
+"""A square block is singular when ``|det M|`` <= SINGULAR_RATIO * prod of its column norms."""
 
 _RATIO_SQUARED = SINGULAR_RATIO * SINGULAR_RATIO
 
 Number = TypeVar("Number", float, np.ndarray)
+"""One block's number (a Python float) or a stack's (an array, elementwise)."""
 
 
 def invertible(det: Number, column_norms_squared_product: Number) -> bool | np.ndarray:
@@ -36,7 +37,7 @@ def invertible(det: Number, column_norms_squared_product: Number) -> bool | np.n
 
 
 def hadamard_ratio(M: np.ndarray) -> float:
-    """|det M| / prod_j ||M[:, j]|| of a square block, in [0, 1] (1.0 for an empty block):
+    """``|det M|`` / prod_j ||M[:, j]|| of a square block, in [0, 1] (1.0 for an empty block):
     how far from singular it is, on the scale of :data:`SINGULAR_RATIO`."""
     if M.ndim != 2 or M.shape[0] != M.shape[1]:
         raise InputError(f"the Hadamard ratio is defined for a square block, got shape {M.shape}")

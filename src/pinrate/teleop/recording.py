@@ -59,14 +59,10 @@ class Recording:
         dt: the controller's period (s).
         max_samples: at most this many ticks are kept (the oldest go first).
 
-    Attributes (as arrays, oldest first; N ticks, N may be 0):
-        times: the time of each tick (s), as given to :meth:`~.session.Teleop.tick`, (N,);
-            never decreasing: a tick dated before the previous one is kept at the previous
-            one's time.
-        q: the configuration after each tick (N, nq); ``start`` is the one before the first.
-        joint_rates: the rates applied at each tick (N, nv), rad/s or m/s.
-        status: each tick's :class:`~pinrate.Status` value, (N,) strings.
-        detail: each tick's reason in words, (N,) strings.
+    The ticks are arrays, oldest first (N ticks, N may be 0): :attr:`times`, :attr:`q`,
+    :attr:`joint_rates`, :attr:`status` and :attr:`detail`.
+
+    Attributes:
         start: the configuration before the first tick (nq,), None when not given.
         nq, nv: the sizes of a configuration and of the rates (0 when not known).
 
@@ -114,27 +110,28 @@ class Recording:
 
     @property
     def times(self) -> np.ndarray:
-        """(N,) s, never decreasing."""
+        """The time of each tick (s), as given to :meth:`~.session.Teleop.tick`, (N,); never
+        decreasing: a tick dated before the previous one is kept at the previous one's time."""
         return converted(self._column(0), float)
 
     @property
     def q(self) -> np.ndarray:
-        """(N, nq): the configuration after each tick."""
+        """The configuration after each tick (N, nq); ``start`` is the one before the first."""
         return self._rows(1, self.nq)
 
     @property
     def joint_rates(self) -> np.ndarray:
-        """(N, nv): the rates applied at each tick."""
+        """The rates applied at each tick (N, nv), rad/s or m/s."""
         return self._rows(2, self.nv)
 
     @property
     def status(self) -> np.ndarray:
-        """(N,) strings: each tick's status value."""
+        """Each tick's :class:`~pinrate.Status` value, (N,) strings."""
         return converted(self._column(3), str)
 
     @property
     def detail(self) -> np.ndarray:
-        """(N,) strings: each tick's reason in words."""
+        """Each tick's reason in words, (N,) strings."""
         return converted(self._column(4), str)
 
     def frames(self, fps: float = 30.0) -> np.ndarray:

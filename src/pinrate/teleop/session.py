@@ -1,6 +1,6 @@
 """Barker's operator at the console: a twist from two 3-axis controllers, one controller step
 per tick, a dead man, and the way back (Barker 1983, "resolved-rate control by an operator";
-"recording and reversing a motion").
+"recording and reversing a motion")::
 
     teleop = Teleop(robot)                        # q0: robot.home()
     teleop.command([1, 0, 0], [0, 0, 0])          # full deflection along the hand's x axis

@@ -22,6 +22,7 @@ from ..checks import check_count
 from ..errors import InputError, SchedulerError
 
 T = TypeVar("T")
+"""What the function mapped over the chunks returns for one chunk."""
 
 SCHEDULER_TIMEOUT = 5.0
 """Seconds to wait for a Dask scheduler before a SchedulerError."""

@@ -39,7 +39,7 @@ class Convergence:
         G: U A^-1 B W^-1 (k x k, eq. 32), H: B W^-1 U A^-1 (m x m, eq. 50): dimensionless
             maps of the twist error (in the sensor frame's axes).
         eigenvalues: of the smaller of G and H (they share their non-zero eigenvalues).
-        spectral_radius: the largest |eigenvalue| (0.0 when there is none).
+        spectral_radius: the largest ``|eigenvalue|`` (0.0 when there is none).
         converges: spectral_radius < 1, the Theorem's condition at q.
         algorithm: whose error map gave the coupling (and ρ where the Theorem does not apply).
         theorem_applies: A and W are square (and invertible: otherwise the test raised), as

@@ -46,6 +46,7 @@ from .skeleton import Skeleton
 from .visualizer import RobotVisualizer
 
 ROOT = "pinrate"
+"""The Meshcat path under which a Viewer draws the robot."""
 CAMERA_DIRECTION = np.array([1.0, -1.25, 0.85]) / np.linalg.norm([1.0, -1.25, 0.85])
 """From the scene's centre towards the camera: an elevated three-quarter view (world axes)."""
 
@@ -71,6 +72,11 @@ class Viewer:
         offline: no server: the scene is kept in this process (:attr:`scene`, a
             :class:`~.offline.SceneCommands`) for a page that builds it itself (the teleop
             console) or for :meth:`save_html`; :attr:`url` is "".
+
+    Attributes:
+        url: the page to open ("" when offline).
+        scene: the scene kept in this process when offline, None otherwise.
+        skeleton: the kinematic tree drawn for the links without a visual mesh.
     """
 
     def __init__(
@@ -242,7 +248,7 @@ class Viewer:
         realtime: bool = True,
         fps: float = 30.0,
     ) -> None:
-        """Animate a servo run: the path coloured by ρ, then the robot along it at ``speed``× real time."""
+        """Animate a servo run: the path coloured by ρ, then the robot along it at ``speed`` times real time."""
         if not isinstance(trajectory, Trajectory):
             raise InputError(f"play takes a Trajectory (what servo() returns), not {type(trajectory).__name__}")
         speed = check_positive(speed, "speed")

@@ -33,6 +33,9 @@ class RobotVisualizer(MeshcatVisualizer):
       docstring says why).
     * The names of the geometries it actually sent are kept in :attr:`drawn` (Pinocchio
       only warns about the others), so the viewer can draw the skeleton where a link has none.
+
+    Attributes:
+        drawn: the names of the geometries sent to the viewer.
     """
 
     viewer: meshcat.Visualizer  # set by initViewer
