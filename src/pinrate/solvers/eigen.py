@@ -29,7 +29,7 @@ import numpy as np
 _SQRT3_HALF = math.sqrt(3.0) / 2.0
 _TWO_PI_THIRDS = 2.0 * math.pi / 3.0
 FLAT = 1e-200
-"""Viète's cut: a 3x3 whose shifted p >= -FLAT has a triple root (rho is |tr M / 3|); the
+"""Viète's cut: a 3x3 whose shifted p >= -FLAT has a triple root (rho is ``|tr M / 3|``); the
 compiled core's ``FLAT`` must be the same (pinrate.compiled checks it at load)."""
 
 

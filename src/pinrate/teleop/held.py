@@ -23,7 +23,7 @@ from ..kinematics.spatial import saturate
 class Held(NamedTuple):
     """The command held (one tuple, assigned at once: a reader never sees half of it).
     ``linear`` m/s and ``angular`` rad/s (``frame`` axes; in the uncoupled mode ``angular``
-    holds the wrist joints' rates, one per axis), ``stamp`` s, ``mode`` a :data:`MODES` value
+    holds the wrist joints' rates, one per axis), ``stamp`` s, ``mode`` a :data:`~pinrate.teleop.session.MODES` value
     or ``"jog"``, ``jog`` {joint: rate} for a jog."""
 
     linear: np.ndarray

@@ -52,7 +52,10 @@ MESSAGE_RATE = 100.0
 :data:`FLOOD_LIMIT` dropped messages is disconnected."""
 
 MESSAGE_BURST = 200.0
+"""Messages a page may send at once before :data:`MESSAGE_RATE` applies."""
+
 FLOOD_LIMIT = 1000
+"""Dropped messages after which a flooding page is disconnected."""
 
 FREEZE_LIMIT = 1.5
 """s: how long the page's main thread may be silent while its heartbeat goes on (the page's
@@ -112,7 +115,7 @@ class PageSocket(Guarded, tornado.websocket.WebSocketHandler):
         self.offset_at = 0.0  # when clock_offset was last updated (monotonic s)
 
     def refuse_beyond_host(self, policy: AccessPolicy) -> None:
-        """After the Host's (:meth:`Guarded.prepare`): the Origin, the token, the cap."""
+        """After the Host's (``Guarded.prepare``): the Origin, the token, the cap."""
         if not policy.origin_allowed(self.request.headers.get("Origin"), self.request.host):
             raise tornado.web.HTTPError(403, reason="Origin not allowed")
         if not policy.token_allowed(self.get_query_argument("token", None)):
@@ -156,7 +159,7 @@ Request = tuple[str, dict[str, Any], PageSocket | None]
 class Pages:
     """The pages connected to one console: who controls, what they say, what they are sent.
 
-    Everything here runs on the web thread's loop (:attr:`loop`) but :meth:`event`, which
+    Everything here runs on the web thread's loop (``loop``) but :meth:`event`, which
     any thread may call.
 
     Args:
@@ -298,7 +301,7 @@ class Pages:
     # ------------------------------------------------------------------ what pages say
     def message(self, client: PageSocket, message: str | bytes, arrived: float) -> None:
         """One message from a page, read at ``arrived`` (monotonic s). Unreadable ones (not
-        JSON, too deep, not an object) raise; :meth:`PageSocket.on_message` answers them."""
+        JSON, too deep, not an object) raise; ``PageSocket.on_message`` answers them."""
         data = json.loads(message)
         if not isinstance(data, dict) or not isinstance(data.get("type"), str):
             raise ValueError("not a message")
