@@ -25,6 +25,7 @@ import pytest
 import pinrate
 from compiled_core import needs_core, path
 from pinrate.control.controller import Controller
+from pinrate.control.singularity import STRATEGIES
 from pinrate.kinematics.targets import nearby_target
 from pinrate.theorem import spectral_radius_at
 from support import DATA, spectral_radius_tolerance
@@ -266,3 +267,22 @@ def test_edited_limits_reach_the_next_run() -> None:
             held = pinrate.servo(robot, robot.home(), target, max_steps=300)
         assert "joint limit" in held.status and "joint limit" not in free.status
         assert (held.q <= upper + 1e-12).all()
+
+
+@pytest.mark.parametrize("singularity", [name for name in STRATEGIES if name != "auxiliary_elbow"])
+@pytest.mark.parametrize("algorithm", ["exact", "mca1", "dls"])
+@pytest.mark.parametrize("name", ["ur5", "panda", "scara"])
+def test_the_singular_region_every_strategy_and_starts_away_from_home(
+    name: str, algorithm: str, singularity: str
+) -> None:
+    """Far targets (through the singular region and onto the limits), from home and from a
+    random start, each strategy with a wrist rule: the two paths agree as everywhere (the
+    singular region's steps are Python's on both; what differs is rounding carried in)."""
+    robot = pinrate.load(name)
+    partition = pinrate.Partition.auto(robot)
+    for seed, wrist in zip(range(2), ("split", "last_then_first"), strict=True):
+        start = robot.home() if seed == 0 else robot.random_configuration(np.random.default_rng(seed))
+        _, target = nearby_target(robot, partition, seed, spread=2.5)
+        settings = {"algorithm": algorithm, "singularity": singularity, "wrist": wrist, "velocity_limits": None}
+        python, compiled = both(robot, start, target, max_steps=800, **settings)
+        assert_same(robot, python, compiled, bitwise=bitwise(robot, algorithm))

@@ -125,3 +125,12 @@ def test_every_strategy_is_a_module_behind_one_protocol() -> None:
     for name, rule in singularity.RULES.items():
         assert rule.__name__ == f"pinrate.control.singularity.{name}"
         assert isinstance(rule.decelerates, bool) and callable(rule.near)
+
+
+def test_an_option_changed_after_construction_is_refused() -> None:
+    # Every stage copies its options at construction: a later change would act half-way.
+    controller = pinrate.Controller(pinrate.load("ur5"), posture="home")
+    for name, value in (("posture_gain", 5.0), ("dt", 0.02), ("slow_threshold", 0.1), ("algorithm", "mca1")):
+        with pytest.raises(AttributeError, match=f"Controller.{name} is fixed"):
+            setattr(controller, name, value)
+    assert controller.dt == 0.01 and controller.posture.gain == 1.0

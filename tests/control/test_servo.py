@@ -300,9 +300,30 @@ def test_servo_with_a_controller_and_bad_options(ur5: pinrate.Robot) -> None:
     np.testing.assert_array_equal(given.q, built.q)
     with pytest.raises(pinrate.InputError, match="drop algorithm"):
         pinrate.servo(ur5, q0, target, controller=controller, algorithm="exact")
+    # an option equal to servo's own default is refused too, never silently replaced
+    with pytest.raises(pinrate.InputError, match="drop algorithm, singularity"):
+        pinrate.servo(ur5, q0, target, controller=controller, algorithm="mca1", singularity="decelerate")
     with pytest.raises(pinrate.InputError, match="drop collision"):
         pinrate.servo(ur5, q0, target, controller=controller, collision=True)
     with pytest.raises(pinrate.InputError, match="another Robot"):
         pinrate.servo(pinrate.load("ur5"), q0, target, controller=controller)
     with pytest.raises(pinrate.InputError, match=r"no option 'colision'.*collision"):
         pinrate.servo(ur5, q0, target, colision=True)
+
+
+def test_a_controller_subclass_with_its_own_step_is_servoed_by_that_step(ur5: pinrate.Robot) -> None:
+    # The compiled loop knows only Controller.step: a subclass that steps its own way (here it
+    # never moves) must be run by Python, whichever backend is chosen.
+    class Still(pinrate.Controller):
+        def step(self, q, command, *, observation=None):  # type: ignore[no-untyped-def]
+            step = super().step(q, command, observation=observation)
+            step.q, step.joint_rates = np.array(q, dtype=float), np.zeros_like(step.joint_rates)
+            return step
+
+    q0 = ur5.home()
+    target = ur5.pose(q0)
+    target[:3, 3] += [0.05, 0.0, 0.0]
+    still = Still(ur5, algorithm="mca1", velocity_limits=math.inf)
+    assert "steps its own way" in still.compiled_reason() and still.compiled() is None
+    run = pinrate.servo(ur5, q0, target, controller=still)
+    assert not run.converged and np.array_equal(run.q[-1], q0)

@@ -239,3 +239,13 @@ def test_bad_strategy_and_threshold_values_are_input_errors() -> None:
         Controller(robot, singular_threshold=0.1, slow_threshold=0.05)
     custom = Controller(robot, singular_threshold=0.001, slow_threshold=0.01)
     assert (custom.singular_threshold, custom.slow_threshold) == (0.001, 0.01)
+
+
+def test_a_conditioning_under_the_noise_floor_is_said_as_such() -> None:
+    # c of a block at a singularity is rounding: its digits must not reach the words.
+    from pinrate.control.singular_region import NOISE_FLOOR, c_said
+
+    assert c_said(0.0134) == "c = 0.013"
+    assert c_said(0.003, "c(W)") == "c(W) = 0.003"
+    assert c_said(9.8e-15) == c_said(9.9e-15) == c_said(0.0) == "c < 1e-09"
+    assert c_said(NOISE_FLOOR) == "c = 1e-09"

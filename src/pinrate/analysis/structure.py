@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics.manipulator import Robot
+from ..kinematics.manipulator import GENERIC_SEED, Robot
 from ..kinematics.partition import Partition, partition_for
 
 _ZERO = 1e-9  # an entry is zero when below this times (1 + max |J|)
@@ -57,12 +57,12 @@ def block_structure(
 ) -> BlockStructure:
     """Zero patterns of A, B, U, W over home and :meth:`Robot.generic_configurations` of the
     partition's joints (the set every test of what holds almost everywhere uses), or over
-    ``samples`` configurations drawn with ``rng`` when given."""
+    ``samples`` configurations drawn with ``rng`` when given (the same seed by default)."""
     partition = partition_for(robot, partition)
     drawn = (
         robot.generic_configurations(partition.joints)
         if samples is None
-        else robot.sample_configurations(samples, rng, joints=partition.joints)
+        else robot.sample_configurations(samples, GENERIC_SEED if rng is None else rng, joints=partition.joints)
     )
     configurations = np.vstack([robot.home()[None, :], drawn])
     magnitude = [np.abs(block) for block in partition.blocks(robot, robot.jacobian_unchecked(configurations[0]))]

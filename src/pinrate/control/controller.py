@@ -221,6 +221,17 @@ class Controller:
         when ``singularity="auxiliary_elbow"`` found an elbow, else None."""
         if self.auxiliary is not None:
             self.elbow_region = self.auxiliary.region
+        self._built = True
+
+    def __setattr__(self, name: str, value: object) -> None:
+        # The stages copied the options when the controller was built: one changed afterwards
+        # would act in some of them and not in others. Refused, with the way to do it.
+        if name in _options(Controller) and getattr(self, "_built", False):
+            raise AttributeError(
+                f"Controller.{name} is fixed when the controller is built: build a new Controller "
+                "(Teleop.configure does so for a console)"
+            )
+        object.__setattr__(self, name, value)
 
     @property
     def elbow(self) -> Elbow | None:
@@ -231,14 +242,16 @@ class Controller:
         """The compiled twin of this controller (:mod:`pinrate.compiled`) with its settings as
         they are now; None where the Python path is chosen or the configuration is one the
         core does not cover (:meth:`compiled_reason` says which)."""
-        return compiled_twin.twin(self, _OPTIONS)
+        return None if self.compiled_reason() is not None else compiled_twin.twin(self, _options(type(self)))
 
     def compiled_reason(self) -> str | None:
         """Why this controller's loops run on Python though the core may be there (None when
         nothing in the configuration stops the core): the core's reason, or the first option
         :data:`~.compiled_twin.COMPILED_COVERAGE` does not cover at its value. An option
         missing from that table is not covered (fails closed)."""
-        return compiled_twin.reason(self, _OPTIONS)
+        if type(self).step is not Controller.step:
+            return f"{type(self).__name__} steps its own way: its loops run on the Python path"
+        return compiled_twin.reason(self, _options(type(self)))
 
     def position_limit(self, number: int) -> Limit:
         """The ``number``-th position limit the controller keeps (the compiled core names a
@@ -458,8 +471,16 @@ class Controller:
         return Step(observation.q.copy(), np.zeros(self.robot.nv), status, (), twist, observation, detail, (status,))
 
 
-_OPTIONS = tuple(inspect.signature(Controller).parameters)
-"""The Controller's parameters, whose coverage by the compiled core is looked up by name."""
+_OPTIONS_OF: dict[type, tuple[str, ...]] = {}
+
+
+def _options(kind: type) -> tuple[str, ...]:
+    """The parameters of a Controller class (a subclass's own included), whose coverage by
+    the compiled core is looked up by name."""
+    if kind not in _OPTIONS_OF:
+        _OPTIONS_OF[kind] = tuple(inspect.signature(kind).parameters)
+    return _OPTIONS_OF[kind]
+
 
 COMPILED_COVERAGE = compiled_twin.COMPILED_COVERAGE
 

@@ -42,8 +42,10 @@ go on serving the error (a target the held joint was needed for then ends as "st
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -93,6 +95,25 @@ MIN_TOL = 1e-12
 """Smallest ``tol`` (m and rad): finer than double precision resolves a pose of a 1 m arm."""
 
 
+def _options_from_one_place(function: Callable[..., Trajectory]) -> Callable[..., Trajectory]:
+    """With ``controller=`` given, any Controller option passed beside it is an InputError
+    (whatever its value: an option equal to servo's default is refused too, never ignored)."""
+
+    @functools.wraps(function)
+    def checked(*arguments: Any, **keywords: Any) -> Trajectory:
+        if keywords.get("controller") is not None:
+            given = sorted(set(keywords) & set(CONTROLLER_OPTIONS))
+            if given:
+                raise InputError(
+                    f"servo(controller=...) takes its options from the controller: drop {', '.join(given)} "
+                    "(or build the controller with them)"
+                )
+        return function(*arguments, **keywords)
+
+    return checked
+
+
+@_options_from_one_place
 def servo(
     robot: Robot,
     q0: object,
@@ -130,16 +151,6 @@ def servo(
     as acceleration-limited rates, carries over from earlier steps). An unknown option is an
     InputError listing the valid ones.
     """
-    explicit: dict[str, Any] = {
-        "algorithm": algorithm,
-        "partition": partition,
-        "dt": dt,
-        "max_linear_speed": max_linear_speed,
-        "max_angular_speed": max_angular_speed,
-        "velocity_limits": velocity_limits,
-        "singularity": singularity,
-        "wrist": wrist,
-    }
     if controller is None:
         unknown = sorted(set(controller_options) - set(CONTROLLER_OPTIONS))
         if unknown:
@@ -147,20 +158,22 @@ def servo(
                 f"servo() has no option {', '.join(map(repr, unknown))}; its own are gain, max_steps, tol, "
                 f"stall_time, controller, and the Controller's: {', '.join(CONTROLLER_OPTIONS)}"
             )
-        controller = Controller(robot, **explicit, **controller_options)
-    else:
-        if not isinstance(controller, Controller):
-            raise InputError(f"controller must be a pinrate.Controller, not {type(controller).__name__}")
-        if controller.robot is not robot:
-            raise InputError("the controller was built for another Robot object: servo it on that one")
-        given = sorted(
-            [*controller_options, *(name for name, value in explicit.items() if value is not SERVO_DEFAULTS[name])]
+        controller = Controller(
+            robot,
+            algorithm=algorithm,
+            partition=partition,
+            dt=dt,
+            max_linear_speed=max_linear_speed,
+            max_angular_speed=max_angular_speed,
+            velocity_limits=velocity_limits,
+            singularity=singularity,
+            wrist=wrist,
+            **controller_options,
         )
-        if given:
-            raise InputError(
-                f"servo(controller=...) takes its options from the controller: drop {', '.join(given)} "
-                "(or build the controller with them)"
-            )
+    elif not isinstance(controller, Controller):
+        raise InputError(f"controller must be a pinrate.Controller, not {type(controller).__name__}")
+    elif controller.robot is not robot:
+        raise InputError("the controller was built for another Robot object: servo it on that one")
     q = robot.check_q(q0)
     goal = PoseGoal.of(target, gain)
     tol = check_positive(tol, "tol")
@@ -177,12 +190,6 @@ def servo(
     else:
         run.compiled(core)
     return run.trajectory()
-
-
-SERVO_DEFAULTS = {
-    name: parameter.default for name, parameter in inspect.signature(servo).parameters.items() if name != "robot"
-}
-"""servo()'s own defaults of the Controller options it names (compared by identity)."""
 
 
 class _Log:

@@ -48,6 +48,17 @@ WRIST_PAIR_SHARE = 0.9
 the square of its weakest right singular vector."""
 
 
+NOISE_FLOOR = 1e-9
+"""c under this is rounding, not a measure: the two paths agree on q to about 1e-12 where
+their float operations differ, and c of a block at a singularity moves by as much, so its
+digits under 1e-9 differ between paths and machines. Said as "c < 1e-09"."""
+
+
+def c_said(value: float, name: str = "c") -> str:
+    """``c = 0.013``, or ``c < 1e-09`` under :data:`NOISE_FLOOR` (``name`` for c: "c(W)")."""
+    return f"{name} = {value:.2g}" if value >= NOISE_FLOOR else f"{name} < {NOISE_FLOOR:g}"
+
+
 def check_strategy(value: object, valid: tuple[str, ...], what: str) -> str:
     """The strategy name, or an InputError listing the valid ones."""
     if not isinstance(value, str) or value not in valid:
@@ -203,6 +214,7 @@ __all__ = [
     "FREEZE_SHARE",
     "HALT_MARGIN",
     "MAX_DAMPING",
+    "NOISE_FLOOR",
     "SINGULAR_THRESHOLD",
     "SLOW_THRESHOLD",
     "WRIST_PAIR_SHARE",
@@ -211,6 +223,7 @@ __all__ = [
     "Conditioning",
     "adaptive_damping",
     "block_of",
+    "c_said",
     "carrying_joints",
     "check_strategy",
     "check_thresholds",

@@ -16,6 +16,7 @@ from ..solvers.conditioning import inverse_condition, truncated_pinv
 from .commands import Uncoupled, joint_rate_vector
 from .context import StepContext
 from .observation import Observation
+from .singular_region import c_said
 from .status import Status
 
 
@@ -71,7 +72,7 @@ class WristCentre:
             value, _ = inverse_condition(centre_jacobian, min(centre_jacobian.shape))
             if value < context.slow_threshold:
                 statuses.append(Status.NEAR_SINGULARITY)
-                details.append(f"the arm's wrist-centre block is near singular (c = {value:.2g}): generalized inverse")
+                details.append(f"the arm's wrist-centre block is near singular ({c_said(value)}): generalized inverse")
 
         def solve(left_out: frozenset[str]) -> np.ndarray:
             rates = wrist.copy()

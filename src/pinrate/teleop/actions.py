@@ -24,6 +24,7 @@ from typing import Any
 
 from ..errors import InputError, PinrateError
 from ..viewer import Viewer
+from .pacing import leave_realtime
 from .protocol import Pages
 from .recording import Recording
 from .session import MODES, Teleop
@@ -75,6 +76,7 @@ class Recordings:
 
     def save(self, recording: Recording) -> None:
         """Write a recorded run as .npz and as a standalone HTML replay; tell the pages."""
+        leave_realtime()  # started by the control thread: not at its priority
         try:
             with self._lock:  # one save at a time: the names stay unique
                 self._write(recording)

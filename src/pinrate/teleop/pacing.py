@@ -6,13 +6,15 @@ behind it for milliseconds (measured: p99 4.7 ms on a 2-core VM, where a bare sl
 the same conditions does no better). A real-time thread does not: :func:`request_realtime`
 asks for ``SCHED_FIFO`` for the calling thread, as ros2_control's controller manager does,
 where the OS allows it (root, ``CAP_SYS_NICE``, or an ``rtprio`` limit in
-``/etc/security/limits.conf``), and says what it got. :data:`MIN_SLEEP` keeps such a thread
-from ever taking a core whole: it always sleeps a little, however late it is, so the web
-thread (which carries STOP) always runs.
+``/etc/security/limits.conf``), and says what it got. Such a thread must never take a core
+whole, or the web thread, which carries STOP, would wait behind it: a wake-up runs missed
+ticks for at most :data:`BATCH_LIMIT`, stops them when a button was pressed, and then sleeps
+at least :data:`YIELD_SHARE` of the time it worked (:data:`MIN_SLEEP` at the least).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
 from collections import deque
@@ -27,6 +29,23 @@ REALTIME_PRIORITY = 50
 
 MIN_SLEEP = 1e-4
 """s: the least the control loop sleeps at each wake-up, even when it is behind."""
+
+BATCH_LIMIT = 0.01
+"""s: the most a wake-up spends running missed ticks; the rest wait for the next wake-up
+(a button pressed meanwhile is taken before them)."""
+
+YIELD_SHARE = 0.25
+"""After each wake-up the loop sleeps at least this share of the time it just worked: a
+loop whose ticks outlast their period still leaves a core a fifth of its time, so the web
+thread, which carries STOP, runs within about :data:`BATCH_LIMIT` on one core too."""
+
+
+def leave_realtime() -> None:
+    """Put the calling thread back under normal scheduling (a thread started by the real-time
+    control thread inherits its policy: a recording's save must not run at its priority)."""
+    if hasattr(os, "sched_setscheduler"):
+        with contextlib.suppress(OSError):  # not permitted, or already normal: nothing to leave
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
 
 
 def request_realtime(priority: int | None = REALTIME_PRIORITY) -> str:
@@ -81,4 +100,13 @@ class LoopStats:
         }
 
 
-__all__ = ["MIN_SLEEP", "REALTIME_PRIORITY", "STATS_WINDOW", "LoopStats", "request_realtime"]
+__all__ = [
+    "BATCH_LIMIT",
+    "MIN_SLEEP",
+    "REALTIME_PRIORITY",
+    "STATS_WINDOW",
+    "YIELD_SHARE",
+    "LoopStats",
+    "leave_realtime",
+    "request_realtime",
+]

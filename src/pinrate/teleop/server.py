@@ -65,7 +65,7 @@ from .handlers import HEADER_TIMEOUT as HEADER_TIMEOUT
 from .handlers import MAX_CONNECTIONS as MAX_CONNECTIONS
 from .handlers import STATIC as STATIC
 from .handlers import console_files, web_server
-from .pacing import MIN_SLEEP, REALTIME_PRIORITY, LoopStats, request_realtime
+from .pacing import BATCH_LIMIT, MIN_SLEEP, REALTIME_PRIORITY, YIELD_SHARE, LoopStats, request_realtime
 from .protocol import CLOCK_DRIFT as CLOCK_DRIFT
 from .protocol import FLOOD_LIMIT as FLOOD_LIMIT
 from .protocol import FREEZE_LIMIT as FREEZE_LIMIT
@@ -353,12 +353,18 @@ class TeleopServer:
             applied_seq = pages.input_seq
             before = teleop.q
             before_status = None if teleop.last is None else teleop.last.status
+            done = 0
             try:
                 for tick in range(ticks):  # each missed tick at its own time (the recording's times)
                     teleop.tick(now - (ticks - 1 - tick) * period)
+                    done += 1
+                    # A long batch yields: a button pressed meanwhile (STOP) comes first.
+                    if time.monotonic() - now > BATCH_LIMIT or not pages.requests.empty():
+                        break
             except Exception as error:  # a bug: the robot halts, the console goes on
                 self.actions.failed(error)
-            owed -= ticks * period
+                done = ticks
+            owed -= done * period
             self._applied_seq = applied_seq
             if ticks and (
                 not np.array_equal(teleop.q, before) or teleop.last is None or teleop.last.status is not before_status
@@ -383,9 +389,11 @@ class TeleopServer:
                 pages.event(f"reversal stopped: the controlling page is {why}", "warning")
                 self._changed.set()
             deadline += period
-            delay = deadline - time.monotonic()
-            # Always a little sleep, however late: a real-time thread never takes a core whole.
-            time.sleep(max(delay, MIN_SLEEP))
+            finished = time.monotonic()
+            delay = deadline - finished
+            # However late, a share of the time worked is slept: a real-time thread never
+            # takes a core whole (pacing's docstring).
+            time.sleep(max(delay, MIN_SLEEP, YIELD_SHARE * (finished - now)))
             if delay < -MAX_CATCH_UP:
                 deadline = time.monotonic()  # far behind: start afresh rather than race
 

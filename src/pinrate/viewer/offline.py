@@ -138,10 +138,11 @@ class Animation:
         self.fps = float(fps)
         self.repetitions = int(repetitions)
 
-    def lower(self) -> dict[str, object]:
-        """The command as meshcat's viewer reads it (``Visualizer.set_animation``'s lowering)."""
+    def lower(self) -> list[dict[str, object]]:
+        """The animations as meshcat's ``Animation.lower()`` gives them (what
+        ``Visualizer.set_animation`` sends), one per node."""
         times = umsgpack.Ext(FLOAT32, np.arange(self.poses.shape[0], dtype=np.float32).tobytes())
-        animations = []
+        animations: list[dict[str, object]] = []
         for index, path in enumerate(self.paths):
             tracks = [
                 {"name": f".{name}", "type": kind, "times": times, "values": umsgpack.Ext(FLOAT32, values.tobytes())}
@@ -151,15 +152,17 @@ class Animation:
                 )
             ]
             animations.append({"path": path, "clip": {"fps": self.fps, "name": "default", "tracks": tracks}})
-        return {
+        return animations
+
+    def packed(self) -> bytes:
+        """The whole ``set_animation`` command, packed (playing, ``repetitions`` times)."""
+        command = {
             "type": "set_animation",
-            "animations": animations,
+            "animations": self.lower(),
             "options": {"play": True, "repetitions": self.repetitions},
             "path": "",
         }
-
-    def packed(self) -> bytes:
-        return umsgpack.packb(self.lower())
+        return umsgpack.packb(command)
 
 
 __all__ = ["MAIN_JS", "Animation", "SceneCommands"]

@@ -280,7 +280,8 @@ class Viewer:
     def _animation(self, frames: Sequence[dict[str, np.ndarray]], fps: float, loop: bool) -> Animation:
         """Each node's position and quaternion in each frame; a transform's scale (a mesh's
         units) stays in the scene's own transform, which the animation leaves alone."""
-        names = list(frames[0]) if frames else []
+        # The nodes of every frame (one drawn after the recording began has no whole track).
+        names = [name for name in frames[0] if all(name in transforms for transforms in frames)] if frames else []
         poses = np.empty((len(frames), len(names), 7))
         for index, transforms in enumerate(frames):
             for column, name in enumerate(names):
@@ -299,7 +300,7 @@ class Viewer:
         if self.scene is not None:
             return self.scene.write_html(target, extra=[animation.packed()] if animation else [])
         if animation is not None:
-            self.meshcat.window.send(animation)
+            self.meshcat.set_animation(animation, play=True, repetitions=animation.repetitions)
         target.write_text(self.meshcat.static_html(), encoding="utf-8")
         return target
 

@@ -1,4 +1,4 @@
-"""Position limits (step 5 of :mod:`pinrate.control.controller`): a joint whose commanded rate
+"""Position limits (step 6 of :mod:`pinrate.control.controller`, the first limit): a joint whose commanded rate
 would carry it past a limit within dt is *blocked*: the rates are solved again without it (the
 others serve the command as well as they can), and it moves at most onto the limit. A joint
 on its limit whose command points away is not blocked: motion away is always executed. The

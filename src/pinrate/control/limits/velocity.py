@@ -1,4 +1,4 @@
-"""Velocity limits (step 6 of :mod:`pinrate.control.controller`): when a rate exceeds its
+"""Velocity limits (step 6 of :mod:`pinrate.control.controller`, after the look-ahead): when a rate exceeds its
 joint's limit, every rate is scaled by the same factor, the largest that meets every limit,
 so the direction of motion is kept (``Status.RATE_LIMITED``)."""
 

@@ -21,7 +21,7 @@ from ...solvers.conditioning import inverse_condition
 from ..context import StepContext
 from ..elbow import ELBOW_REGION, EXTENDED, Elbow, arm_frame, elbow_rate, find_elbow, remaining_rates
 from ..observation import Observation
-from ..singular_region import ColumnMap, Conditioning, carrying_joints
+from ..singular_region import ColumnMap, Conditioning, c_said, carrying_joints
 from ..status import Status
 from . import decelerate
 from .wrist import wrist_rule
@@ -151,7 +151,7 @@ class AuxiliaryElbow:
                     details.append(detail)
                 else:
                     statuses.append(Status.NEAR_SINGULARITY)
-                    details.append(f"the rows left to the other joints are near singular (c = {value:.2g})")
+                    details.append(f"the rows left to the other joints are near singular ({c_said(value)})")
         return Auxiliary(
             bend,
             outward,

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..context import StepContext
 from ..observation import Observation
-from ..singular_region import ColumnMap, Conditioning, deceleration, halts
+from ..singular_region import ColumnMap, Conditioning, c_said, deceleration, halts
 from ..status import Status
 from .plan import Plan, lookahead
 
@@ -66,7 +66,7 @@ def decelerate(
     (c - singular) / (slow - singular), c the lesser of now and ahead."""
     singular, slow = context.singular_threshold, context.slow_threshold
     ahead, crossed = lookahead(context, observation, rates, columns)
-    where = f"block {block} near singular (c = {min(value, ahead):.2g})"
+    where = f"block {block} near singular ({c_said(min(value, ahead))})"
     crossed = crossed and value >= singular  # sign(det) next to det = 0 is noise
     if ahead > value and not crossed:
         if value >= slow:

@@ -12,7 +12,7 @@ from ...solvers.generalized import filtered_rates, generalized_inverter
 from ...solvers.reference import Inverter
 from ..context import StepContext
 from ..observation import Observation
-from ..singular_region import ColumnMap, Conditioning, block_of
+from ..singular_region import ColumnMap, Conditioning, block_of, c_said
 from ..status import Status
 from .wrist import wrist_rule
 
@@ -53,7 +53,7 @@ class Rule(Protocol):
 
 def where(weakest: Conditioning, slow_threshold: float) -> str:
     """The words every strategy's detail starts with."""
-    return f"block {weakest.block} near singular (c = {weakest.value:.2g} < {slow_threshold:g})"
+    return f"block {weakest.block} near singular ({c_said(weakest.value)} < {slow_threshold:g})"
 
 
 def solve_planned(

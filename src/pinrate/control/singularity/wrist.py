@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from ..singular_region import Conditioning, wrist_pair
+from ..singular_region import Conditioning, c_said, wrist_pair
 
 
 class WristRule(NamedTuple):
@@ -51,7 +51,7 @@ def wrist_rule(wrist: str, names: tuple[str, ...], weakest: Conditioning, n_arm:
         dropped,
         merged,
         released_by,
-        f"wrist axes of {joints} aligned (c({weakest.block}) = {weakest.value:.2g}): {how}",
+        f"wrist axes of {joints} aligned ({c_said(weakest.value, f'c({weakest.block})')}): {how}",
     )
 
 

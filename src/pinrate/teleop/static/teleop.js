@@ -89,12 +89,13 @@
   let polledAt = performance.now();
   function poll() {
     const now = performance.now();
-    // A main thread blocked (software rendering) holds the device's reports back with it:
-    // silence is counted from the end of such a block, not through it (a page frozen for
-    // longer is the server's freeze rule's).
-    if (now - polledAt > 4 * ALIVE_MS) hidHeardAt = Math.max(hidHeardAt, now);
+    // The device's silence is counted over the time this thread ran: a block (software
+    // rendering) holds its reports back too, so a block counts for at most 4 ALIVE_MS, and
+    // a page that blocks every frame still stops a silent cap (a frozen page: the server's
+    // freeze rule).
+    hidSilence += Math.min(now - polledAt, 4 * ALIVE_MS);
     polledAt = now;
-    if (hidDevice && state.hid.some(Boolean) && now - hidHeardAt > HID_STALE_MS) {
+    if (hidDevice && state.hid.some(Boolean) && hidSilence > HID_STALE_MS) {
       state.hid = [0, 0, 0, 0, 0, 0];
       $("spacemouse").textContent = `SpaceMouse silent for ${HID_STALE_MS} ms while deflected: stopped`;
       sendInput();
@@ -137,9 +138,9 @@
   let hidDevice = null;
   let hidPending = null;
   let hidSentAt = -Infinity;
-  let hidHeardAt = -Infinity;
+  let hidSilence = 0;  // ms of this thread's time since the device's last report
   function onReport(event) {
-    hidHeardAt = performance.now();
+    hidSilence = 0;
     const data = event.data;
     const count = (i) => data.getInt16(2 * i, true);
     const before = state.hid.join();
