@@ -75,17 +75,17 @@ def twin(controller: Any, options: tuple[str, ...]) -> CoreServo | None:
 
 def reason(controller: Any, options: tuple[str, ...]) -> str | None:
     """Why this controller's loops run on Python though the core may be there (None when
-    nothing in the configuration stops the core): the core's reason, or the first option
-    :data:`COMPILED_COVERAGE` does not cover at its value. An option missing from that
-    table is not covered (fails closed)."""
+    nothing in the configuration stops the core): an option missing from
+    :data:`COMPILED_COVERAGE` (not covered: it fails closed, whatever the backend), the
+    core's reason, or the first option the table does not cover at its value."""
+    for option in options:
+        if option not in COMPILED_COVERAGE:
+            return f"the option {option!r} is not known to the compiled core: the Python path runs"
     try:
         if core_kinematics(controller.robot) is None:
             return backend().reason
     except UnsupportedByCoreError as unsupported:
         return str(unsupported)
-    for option in options:
-        if option not in COMPILED_COVERAGE:
-            return f"the option {option!r} is not known to the compiled core: the Python path runs"
     for covered, reason in COMPILED_COVERAGE.values():
         if covered is not None and not covered(controller):
             return reason
