@@ -20,6 +20,7 @@ import importlib.util
 import inspect
 import pkgutil
 import re
+import typing
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -65,9 +66,6 @@ nitpick_ignore_regex = [
 
 logger = logging.getLogger(__name__)
 
-# For now: references whose fix belongs to a file being rewritten on another branch (the
-# split of teleop/server.py). Each is (the docstring's module, the target); remove an entry
-# when that file is free again and its fix is made there.
 PENDING: set[tuple[str, str]] = set()
 """(module, target) of unresolved references waiting for a docstring of their own (none now)."""
 
@@ -80,7 +78,9 @@ def home(module: str, name: str) -> str | None:
     value = getattr(importlib.import_module(module), name, None)
     if isinstance(value, ModuleType):
         return value.__name__
-    if inspect.isclass(value) or inspect.isfunction(value):
+    # typing.get_origin: a type alias (tuple[...], Callable[...]) counts as a class on Python
+    # 3.10 but is data, documented where it is assigned.
+    if (inspect.isclass(value) or inspect.isfunction(value)) and typing.get_origin(value) is None:
         return f"{value.__module__}.{value.__qualname__}"
     while True:
         tree = ast.parse(inspect.getsource(importlib.import_module(module)))
@@ -170,11 +170,12 @@ def bound_name(app: Sphinx, env: Any, node: pending_xref, contnode: nodes.TextEl
                 retry["reftarget"] = resolved
                 retry.attributes.pop("refspecific", None)
                 domain = env.get_domain("py")
-                reference = domain.resolve_xref(
-                    env, node["refdoc"], app.builder, node["reftype"], resolved, retry, contnode
-                )
-                if reference is not None:
-                    return reference
+                # A type alias (Axis, Inverter) is data, not a class: an annotation's
+                # :class: link to one resolves as any object (Sphinx 8.1 links them so).
+                for role in (node["reftype"], "obj"):
+                    reference = domain.resolve_xref(env, node["refdoc"], app.builder, role, resolved, retry, contnode)
+                    if reference is not None:
+                        return reference
             break
     return None
 
