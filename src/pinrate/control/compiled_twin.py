@@ -45,11 +45,9 @@ at a controller's value. A test keeps its keys equal to ``Controller``'s paramet
 added without an entry keeps its controllers on Python (:meth:`.Controller.compiled_reason`)."""
 
 
-def twin(controller: Any, options: tuple[str, ...]) -> CoreServo | None:
+def twin(controller: Any) -> CoreServo | None:
     """``controller``'s compiled twin with its settings as they are now (cached per robot and
-    settings); None where :func:`reason` gives one. ``options``: the Controller's parameters."""
-    if reason(controller, options) is not None:
-        return None
+    settings); None where the core refuses the robot. The caller has checked :func:`reason`."""
     # Everything settings() reads: a servo call builds a controller afresh, and the
     # same settings come back.
     key = (

@@ -242,7 +242,7 @@ class Controller:
         """The compiled twin of this controller (:mod:`pinrate.compiled`) with its settings as
         they are now; None where the Python path is chosen or the configuration is one the
         core does not cover (:meth:`compiled_reason` says which)."""
-        return None if self.compiled_reason() is not None else compiled_twin.twin(self, _options(type(self)))
+        return None if self.compiled_reason() is not None else compiled_twin.twin(self)
 
     def compiled_reason(self) -> str | None:
         """Why this controller's loops run on Python though the core may be there (None when
@@ -484,9 +484,13 @@ def _options(kind: type) -> tuple[str, ...]:
 
 COMPILED_COVERAGE = compiled_twin.COMPILED_COVERAGE
 
+CONTROLLER_OPTIONS = tuple(name for name in _options(Controller) if name != "robot")
+"""Every keyword option of :class:`Controller` (what :func:`~.servo_loop.servo` passes on)."""
+
 
 __all__ = [
     "COMPILED_COVERAGE",
+    "CONTROLLER_OPTIONS",
     "MAX_ANGULAR_SPEED",
     "MAX_LINEAR_SPEED",
     "Controller",

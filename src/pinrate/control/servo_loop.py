@@ -43,7 +43,6 @@ go on serving the error (a target the held joint was needed for then ends as "st
 from __future__ import annotations
 
 import functools
-import inspect
 import math
 from collections.abc import Callable
 from typing import Any
@@ -57,12 +56,16 @@ from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from .commands import PoseGoal
-from .controller import MAX_ANGULAR_SPEED, MAX_LINEAR_SPEED, Controller, Observation, error_norms
+from .controller import (
+    CONTROLLER_OPTIONS,
+    MAX_ANGULAR_SPEED,
+    MAX_LINEAR_SPEED,
+    Controller,
+    Observation,
+    error_norms,
+)
 from .status import Status, most_severe
 from .trajectory import Trajectory
-
-CONTROLLER_OPTIONS = tuple(name for name in inspect.signature(Controller).parameters if name != "robot")
-"""Every keyword option of :class:`Controller`, which :func:`servo` passes on."""
 
 DIVERGENCE_FACTOR = 3.0
 """Stop as diverging once position + orientation error exceeds this times its minimum so far."""
