@@ -293,7 +293,7 @@ NB_MODULE(pinrate_core, module) {
   // pinrate keeps a Kinematics per Robot until exit; that is no leak worth a warning.
   nb::set_leak_warnings(false);
   module.attr("PINOCCHIO_VERSION") = PINOCCHIO_VERSION;
-  module.attr("ABI") = 2;  // bumped when pinrate.compiled must change with it
+  module.attr("ABI") = 3;  // bumped when pinrate.compiled must change with it
 
   // boundary.hpp's constants, which pinrate.compiled.boundary checks at load.
   module.attr("SINGULAR_RATIO") = kSingularRatio;
@@ -325,7 +325,9 @@ NB_MODULE(pinrate_core, module) {
               bool same_frame) {
              new (self) Kinematics(make_kinematics(kinds, parents, axes, placements, tip_joint, tip_placement,
                                                    sensor_joint, sensor_placement, same_frame));
-           })
+           },
+           nb::kw_only(), "kinds"_a, "parents"_a, "axes"_a, "placements"_a, "tip_joint"_a, "tip_placement"_a,
+           "sensor_joint"_a, "sensor_placement"_a, "same_frame"_a)
       .def_prop_ro("nq", &Kinematics::nq)
       .def_prop_ro("nv", &Kinematics::nv)
       .def(
@@ -348,7 +350,9 @@ NB_MODULE(pinrate_core, module) {
              new (self) Servo(make_servo(kinematics, settings));
            },
            "kinematics"_a, "settings"_a, nb::keep_alive<1, 2>())
-      .def("run", &run_servo)
+      .def("run", &run_servo, nb::kw_only(), "q0"_a, "target"_a, "gain"_a, "tol"_a, "stall_steps"_a, "max_steps"_a,
+           "divergence_factor"_a, "stall_improvement"_a, "step_number"_a, "best"_a, "progress"_a, "progress_step"_a,
+           "q"_a, "rates"_a, "position"_a, "orientation"_a, "radius"_a, "flags"_a, "scale"_a, "hit"_a)
       .def("spectral_radius_at", &spectral_radius_at)
       .def("solve_timing", &solve_timing);
 }

@@ -26,6 +26,7 @@ import pinrate
 from compiled_core import needs_core, path
 from pinrate.control.controller import Controller
 from pinrate.control.singularity import STRATEGIES
+from pinrate.control.status import Status
 from pinrate.kinematics.targets import nearby_target
 from pinrate.theorem import spectral_radius_at
 from support import DATA, spectral_radius_tolerance
@@ -150,8 +151,9 @@ def test_limits_and_singularities_hand_steps_back(python_steps: list[int]) -> No
         compiled_steps += compiled.steps - len(python_steps)
         assert_same(robot, python, compiled, bitwise=True)
         words |= set(compiled.status)
-    assert {"rate limited", "saturated"} <= words
-    assert words & {"joint limit", "decelerating", "wrist singularity", "near singularity", "singular"}
+    assert {Status.RATE_LIMITED.word, Status.TWIST_SATURATED.word} <= words
+    near = (Status.JOINT_LIMIT, Status.DECELERATE_FOR_SINGULARITY, Status.WRIST_SINGULARITY, Status.NEAR_SINGULARITY)
+    assert words & {*(status.word for status in near), "singular"}
     assert handed_back > 0 and compiled_steps > 10 * handed_back
 
 
@@ -265,7 +267,7 @@ def test_edited_limits_reach_the_next_run() -> None:
     for choice in ("python", "compiled"):
         with path(choice):
             held = pinrate.servo(robot, robot.home(), target, max_steps=300)
-        assert "joint limit" in held.status and "joint limit" not in free.status
+        assert Status.JOINT_LIMIT.word in held.status and Status.JOINT_LIMIT.word not in free.status
         assert (held.q <= upper + 1e-12).all()
 
 

@@ -11,6 +11,7 @@ import pytest
 
 import pinrate
 from pinrate import Controller, InputError, Status
+from pinrate.control.limits.velocity import scaled_detail
 
 AL5D = Path(__file__).parent.parent / "data" / "third_party" / "rtb_al5d_robot.urdf"
 
@@ -180,3 +181,11 @@ def test_a_joint_held_at_its_limit_stops_at_once_under_acceleration_limits() -> 
             assert step.joint_rates[0] - previous[0] == pytest.approx(min(0.02, 0.2 - previous[0]), abs=1e-12)
         previous, q = step.joint_rates, step.q
     assert q[2] == upper and previous[0] == pytest.approx(0.2)
+
+
+def test_a_scale_just_under_one_never_reads_as_one() -> None:
+    """A velocity limit that bound says so: 0.9996 printed to 3 digits would be "1"."""
+    assert "scaled by 0.25 " in scaled_detail(0.25)
+    assert "scaled by 0.9996 " in scaled_detail(0.9996)
+    assert "scaled by 0.999999999 " in scaled_detail(1 - 1e-9)
+    assert float(scaled_detail(np.nextafter(1.0, 0.0)).split()[3]) < 1.0

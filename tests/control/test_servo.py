@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 
 import pinrate
-from pinrate import Partition
+from pinrate import Partition, Status
 from pinrate.kinematics.targets import nearby_target
 
 
@@ -101,7 +101,7 @@ def test_a_joint_limit_holds_the_joint_and_the_run_stalls_there() -> None:
     assert not trajectory.converged
     assert trajectory.reason.startswith("stalled")
     assert trajectory.q[:, 1].max() == pytest.approx(1.0) and trajectory.q[:, 1].max() <= 1.0
-    assert "joint limit" in trajectory.status
+    assert Status.JOINT_LIMIT.word in trajectory.status
     assert trajectory.position_error.shape == (trajectory.q.shape[0],)
 
 
@@ -139,7 +139,7 @@ def test_speed_saturation(ur5: pinrate.Robot) -> None:
         max_linear_speed=0.1,
         max_angular_speed=10.0,
     )
-    assert trajectory.status[0] == "saturated"
+    assert trajectory.status[0] == Status.TWIST_SATURATED.word
     # Exact rates realise the commanded twist: the TCP moves at most 0.1 m/s * dt per step.
     steps = np.linalg.norm(np.diff([ur5.pose(q)[:3, 3] for q in trajectory.q], axis=0), axis=1)
     assert steps.max() <= 0.1 * 0.01 * 1.01

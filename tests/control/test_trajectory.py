@@ -72,3 +72,20 @@ def test_every_step_leaves_its_detail_in_words() -> None:
     words = [detail for status, detail in zip(trajectory.status, trajectory.detail, strict=True) if status != "moving"]
     assert words and all(words)  # every step that met a condition says which
     assert any("block J" in detail for detail in trajectory.detail)
+
+
+def test_a_trajectory_of_the_first_format_loads_with_todays_words(run, tmp_path: Path) -> None:
+    """Release 0.1.0 wrote ``pinrate-trajectory-1`` with its own step words; they are read as
+    today's (the words written here by hand, as 0.1.0's servo_loop spelt them)."""
+    _, trajectory = run
+    path = trajectory.save(tmp_path / "run.npz")
+    with np.load(path, allow_pickle=False) as data:
+        entries = {name: data[name] for name in data.files}
+    old_words = ["saturated", "joint limit", "decelerating", "frozen", "moving", "converged"]
+    entries["format"] = np.array("pinrate-trajectory-1")
+    entries["status"] = np.array([*old_words, *["moving"] * (len(trajectory.status) - len(old_words))])
+    np.savez(tmp_path / "old.npz", **entries)
+    loaded = pinrate.Trajectory.load(tmp_path / "old.npz")
+    statuses = [pinrate.Status.TWIST_SATURATED, pinrate.Status.JOINT_LIMIT, pinrate.Status.DECELERATE_FOR_SINGULARITY]
+    assert loaded.status[:4] == [*(status.word for status in statuses), pinrate.Status.FROZEN.word]
+    assert loaded.status[4:6] == ["moving", "converged"]

@@ -8,12 +8,14 @@ import numpy as np
 
 import pinrate
 from pinrate import Controller, Status
-from pinrate.teleop.display import WORDS, describe, joint_gauges, joint_values
+from pinrate.control.status import WORDS
+from pinrate.teleop.display import COLOURS, describe, joint_gauges, joint_values
 
 
 def test_every_status_has_words_and_a_colour():
-    assert set(WORDS) == set(Status)
-    assert all(word and colour.startswith("#") for word, colour in WORDS.values())
+    assert set(WORDS) == set(COLOURS) == set(Status)
+    assert all(COLOURS[status].startswith("#") for status in Status)
+    assert len(set(WORDS.values())) == len(Status) and all(WORDS.values())
 
 
 def test_idle_moving_halted_and_reversing(ur5):
@@ -33,7 +35,7 @@ def test_a_joint_limit_names_the_joint(ur5):
     q[index] = ur5.model.upperPositionLimit[index]
     step = Controller(ur5).step(q, np.array([0, 0, 0, 0, 0, 0.5]))
     said = describe(step)
-    assert said.word == "at a joint limit"
+    assert said.word == step.status.word == "at a joint limit"  # the one vocabulary
     assert "wrist_3_joint" in said.detail
 
 

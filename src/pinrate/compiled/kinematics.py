@@ -76,15 +76,15 @@ def core_kinematics(robot: Robot) -> Any:
         frames = robot.model.frames
         tip, sensor = frames[robot.tip_id], frames[robot.sensor_id]
         kinematics = core.Kinematics(
-            kinds,
-            parents,
-            np.ascontiguousarray(axes),
-            np.ascontiguousarray(placements),
-            int(tip.parentJoint),
-            np.ascontiguousarray(tip.placement.homogeneous),
-            int(sensor.parentJoint),
-            np.ascontiguousarray(sensor.placement.homogeneous),
-            robot.sensor_id == robot.tip_id,
+            kinds=kinds,
+            parents=parents,
+            axes=np.ascontiguousarray(axes),
+            placements=np.ascontiguousarray(placements),
+            tip_joint=int(tip.parentJoint),
+            tip_placement=np.ascontiguousarray(tip.placement.homogeneous),
+            sensor_joint=int(sensor.parentJoint),
+            sensor_placement=np.ascontiguousarray(sensor.placement.homogeneous),
+            same_frame=robot.sensor_id == robot.tip_id,
         )
         _cache[robot] = kinematics
     return kinematics

@@ -57,10 +57,10 @@ class CoreServo:
         self.settings = settings  # no reference to the robot: the caches keyed by it must let it go
         self._servo = core.Servo(kinematics, core_settings(core, settings))
 
-    def run(self, q: np.ndarray, target: np.ndarray, *arguments: Any) -> tuple[int, int, float, float, int]:
-        """The servo loop from ``q`` (see ``core/src/module.cpp``'s ``run_servo``):
-        (outcome, step number, best, progress, progress step)."""
-        return self._servo.run(q, target, *arguments)
+    def run(self, **arguments: Any) -> tuple[int, int, float, float, int]:
+        """The servo loop, every argument by its name (see ``core/src/module.cpp``'s
+        ``run_servo``): (outcome, step number, best, progress, progress step)."""
+        return self._servo.run(**arguments)
 
     def spectral_radius_at(self, configurations: np.ndarray) -> np.ndarray:
         """ρ of the smaller of G and H at each configuration (N, nq); inf where A or W is singular."""

@@ -47,11 +47,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
 from ..checks import check_count, check_positive
-from ..compiled import CoreServo
-from ..compiled.boundary import CLAMPED, RATE_LIMITED, SATURATED, STEP_FLAGS
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
@@ -61,17 +57,9 @@ from .controller import (
     MAX_ANGULAR_SPEED,
     MAX_LINEAR_SPEED,
     Controller,
-    Observation,
-    error_norms,
 )
-from .status import Status, most_severe
+from .servo_run import DIVERGENCE_FACTOR, STALL_IMPROVEMENT, ServoRun
 from .trajectory import Trajectory
-
-DIVERGENCE_FACTOR = 3.0
-"""Stop as diverging once position + orientation error exceeds this times its minimum so far."""
-
-STALL_IMPROVEMENT = 0.01
-"""The relative fall of the error that counts as progress for the stall rule."""
 
 STALL_TIME_CONSTANTS = 5.0
 """Default stall window in time constants (1 / gain) of the error's decay; at least 1 s."""
@@ -81,18 +69,6 @@ STALL_MAX_STEPS = 100_000
 than this to fall 1 % is not progressing at a useful rate (and a tiny dt would otherwise
 make the window, and the run, endless in wall-clock time)."""
 
-_STEP_WORDS = {
-    Status.TWIST_SATURATED: "saturated",
-    Status.JOINT_LIMIT: "joint limit",
-    Status.RATE_LIMITED: "rate limited",
-    Status.WRIST_SINGULARITY: "wrist singularity",
-    Status.NEAR_SINGULARITY: "near singularity",
-    Status.DECELERATE_FOR_SINGULARITY: "decelerating",
-    Status.AUXILIARY_ELBOW: "auxiliary elbow",
-    Status.FROZEN: "frozen",
-    Status.DECELERATE_FOR_COLLISION: "slowing for collision",
-}
-"""The word a step's status leaves in ``Trajectory.status`` ("moving" for the others)."""
 
 MIN_TOL = 1e-12
 """Smallest ``tol`` (m and rad): finer than double precision resolves a pose of a 1 m arm."""
@@ -186,7 +162,7 @@ def servo(
     if stall_time is None:
         stall_time = max(1.0, STALL_TIME_CONSTANTS / goal.gain)
     stall_steps = min(math.ceil(check_positive(stall_time, "stall_time") / controller.dt), STALL_MAX_STEPS)
-    run = _Run(controller, goal, q, tol, stall_steps, max_steps)
+    run = ServoRun(controller, goal, q, tol, stall_steps, max_steps)
     core = controller.compiled()
     if core is None:
         run.python()
@@ -195,234 +171,11 @@ def servo(
     return run.trajectory()
 
 
-class _Log:
-    """One run's per-step arrays, rows indexed by step number, grown by doubling."""
-
-    def __init__(self, q0: np.ndarray, nv: int, capacity: int) -> None:
-        self.capacity = capacity
-        self.q = np.empty((capacity + 1, q0.size))
-        self.q[0] = q0
-        self.rates = np.empty((capacity, nv))
-        self.position = np.empty(capacity + 1)
-        self.orientation = np.empty(capacity + 1)
-        self.radius = np.empty(capacity + 1)
-        self.flags = np.zeros(capacity, dtype=np.int32)  # the core's step flags (0: a Python step)
-        self.scale = np.ones(capacity)
-        self.hit = np.full(capacity, -1, dtype=np.int32)
-
-    def grow(self) -> None:
-        capacity = 2 * self.capacity
-        for name in ("q", "rates", "position", "orientation", "radius"):
-            old = getattr(self, name)
-            new = np.empty((old.shape[0] - self.capacity + capacity, *old.shape[1:]))
-            new[: old.shape[0]] = old
-            setattr(self, name, new)
-        for name, fill in (("flags", 0), ("scale", 1.0), ("hit", -1)):
-            old = getattr(self, name)
-            new = np.full(capacity, fill, dtype=old.dtype)
-            new[: old.shape[0]] = old
-            setattr(self, name, new)
-        self.capacity = capacity
-
-    def arguments(self) -> tuple[np.ndarray, ...]:
-        return (self.q, self.rates, self.position, self.orientation, self.radius, self.flags, self.scale, self.hit)
-
-
-INITIAL_CAPACITY = 2048
-"""Steps a run's arrays hold before they first grow."""
-
-
-class _Run:
-    """One servo run: the stop rules of the module docstring over :meth:`Controller.step`,
-    on Python (:meth:`python`) or in the compiled core with Python taking the steps it hands
-    back (:meth:`compiled`); both fill one log the same way."""
-
-    def __init__(
-        self, controller: Controller, goal: PoseGoal, q0: np.ndarray, tol: float, stall_steps: int, max_steps: int
-    ) -> None:
-        self.controller, self.goal, self.tol = controller, goal, tol
-        self.stall_steps, self.max_steps = stall_steps, max_steps
-        self.m = controller.index.m
-        self.log = _Log(q0, controller.robot.nv, max(1, min(max_steps, INITIAL_CAPACITY)))
-        self.steps: dict[int, tuple[str, str]] = {}  # step number -> (word, detail) of a Python step
-        self.step_number = 0
-        self.best = math.inf
-        self.progress, self.progress_step = math.inf, 0  # the error at the last 1 % improvement, and when
-        self.final, self.reason = "", ""
-
-    # ------------------------------------------------------------------ the two paths
-    def python(self) -> None:
-        while True:
-            observation, position, orientation = self._record()
-            if self._judge(position, orientation):
-                return
-            if self._python_step(observation):
-                return
-
-    def compiled(self, core: CoreServo) -> None:
-        outcomes = core.core
-        target = np.ascontiguousarray(self.goal.target.homogeneous)
-        while True:
-            outcome, self.step_number, self.best, self.progress, self.progress_step = core.run(
-                self.log.q[self.step_number],
-                target,
-                self.goal.gain,
-                self.tol,
-                self.stall_steps,
-                self.max_steps,
-                DIVERGENCE_FACTOR,
-                STALL_IMPROVEMENT,
-                self.step_number,
-                self.best,
-                self.progress,
-                self.progress_step,
-                *self.log.arguments(),
-            )
-            if outcome not in (outcomes.HANDBACK, outcomes.FULL):
-                self._conclude(outcome, outcomes)
-                return
-            # The core recorded this step's observation and judged it; Python takes the step
-            # from an observation of its own (one more kinematics pass, on these steps only).
-            q = self.log.q[self.step_number]
-            if self._python_step(self.controller.observe_unchecked(q, self.goal)):
-                return
-
-    # ------------------------------------------------------------------ one step's parts
-    def _record(self) -> tuple[Observation, float, float]:
-        """This step's observation, logged; and its error norms (m, rad) as Python floats."""
-        observation = self.controller.observe_unchecked(self.log.q[self.step_number], self.goal)
-        position, orientation = error_norms(observation, self.m)
-        self.log.position[self.step_number] = position
-        self.log.orientation[self.step_number] = orientation
-        self.log.radius[self.step_number] = observation.spectral_radius
-        return observation, position, orientation
-
-    def _judge(self, position: float, orientation: float) -> bool:
-        """The stop rules at this step's error norms; True when the run ends here."""
-        step_number = self.step_number
-        total = position + orientation
-        if position < self.tol and orientation < self.tol:
-            self._converged()
-            return True
-        self.best = min(self.best, total)
-        if total > DIVERGENCE_FACTOR * self.best + self.tol:
-            self._diverging(total)
-            return True
-        if total < (1.0 - STALL_IMPROVEMENT) * self.progress:
-            self.progress, self.progress_step = total, step_number
-        elif step_number - self.progress_step >= self.stall_steps:
-            self._stalled(total)
-            return True
-        if step_number == self.max_steps:
-            self._out_of_steps()
-            return True
-        return False
-
-    # The final word and reason of each stop rule, whichever path ended the run.
-    def _converged(self) -> None:
-        self.final, self.reason = "converged", f"converged in {self.step_number} steps"
-
-    def _out_of_steps(self) -> None:
-        self.final, self.reason = "max steps", f"max_steps ({self.max_steps}) reached"
-
-    def _diverging(self, total: float) -> None:
-        growth = f"error {total:.4g} grew past {DIVERGENCE_FACTOR:g}x its best {self.best:.4g}"
-        self.final, self.reason = "diverging", f"diverging: {growth} at step {self.step_number}"
-
-    def _stalled(self, total: float) -> None:
-        self.final = "stalled"
-        self.reason = (
-            f"stalled: error {total:.4g} (m + rad) has not improved by {STALL_IMPROVEMENT:.0%} on "
-            f"{self.progress:.4g} (step {self.progress_step}) for {self.stall_steps * self.controller.dt:g} s, "
-            f"at step {self.step_number}"
-        )
-
-    def _conclude(self, outcome: int, outcomes: Any) -> None:
-        """The final word and reason of a run the core ended."""
-        total = float(self.log.position[self.step_number] + self.log.orientation[self.step_number])
-        if outcome == outcomes.CONVERGED:
-            self._converged()
-        elif outcome == outcomes.DIVERGING:
-            self._diverging(total)
-        elif outcome == outcomes.STALLED:
-            self._stalled(total)
-        else:
-            self._out_of_steps()
-
-    def _python_step(self, observation: Observation) -> bool:
-        """Controller.step from this step's observation; True when it halts the run."""
-        step_number = self.step_number
-        if step_number >= self.log.capacity:
-            self.log.grow()
-        step = self.controller.step(observation.q, self.goal, observation=observation)
-        if step.status is Status.HALT_FOR_SINGULARITY:
-            self.final, self.reason = "singular", f"singular: {step.detail} at step {step_number}"
-            return True
-        if step.status is Status.HALT_FOR_COLLISION:
-            self.final, self.reason = "collision", f"collision: {step.detail} at step {step_number}"
-            return True
-        self.steps[step_number] = (_STEP_WORDS.get(step.status, "moving"), step.detail)
-        self.log.rates[step_number] = step.joint_rates
-        self.log.q[step_number + 1] = step.q
-        self.step_number = step_number + 1
-        return False
-
-    # ------------------------------------------------------------------ the result
-    def _words(self) -> tuple[list[str], list[str]]:
-        """Each step's status word and detail: the Python steps' own, the core's from its flags."""
-        taken = self.step_number
-        flags = self.log.flags[:taken].tolist()
-        status = [_CORE_WORDS[flag] for flag in flags]
-        details = [""] * taken
-        for step_number, flag in enumerate(flags):
-            if flag & (RATE_LIMITED | CLAMPED):
-                details[step_number] = self._core_detail(step_number, flag)
-        for step_number, (word, detail) in self.steps.items():
-            status[step_number], details[step_number] = word, detail
-        return status, details
-
-    def _core_detail(self, step_number: int, flag: int) -> str:
-        """Controller._finish's detail of a step the core took."""
-        parts = []
-        if flag & RATE_LIMITED:
-            parts.append(f"rates scaled by {self.log.scale[step_number]:.3g} to meet the velocity limits")
-        if flag & CLAMPED:
-            limit = self.controller.position_limit(int(self.log.hit[step_number]))
-            value = self.log.q[step_number + 1][limit.q_index]
-            side, bound = ("lower", limit.lower) if value == limit.lower else ("upper", limit.upper)
-            parts.append(f"{limit.joint} reached its {side} limit {bound:.4g}")
-        return "; ".join(parts)
-
-    def trajectory(self) -> Trajectory:
-        taken = self.step_number
-        status, details = self._words()
-        status.append(self.final)
-        details.append(self.reason)
-        log, controller = self.log, self.controller
-        return Trajectory(
-            q=log.q[: taken + 1].copy(),
-            position_error=log.position[: taken + 1].copy(),
-            orientation_error=log.orientation[: taken + 1].copy(),
-            spectral_radius=log.radius[: taken + 1].copy(),
-            status=status,
-            joint_rates=log.rates[:taken].copy(),
-            converged=self.final == "converged",
-            reason=self.reason,
-            algorithm=controller.algorithm,
-            dt=controller.dt,
-            partition=controller.partition,
-            detail=details,
-        )
-
-
-def _core_word(flag: int) -> str:
-    statuses = [Status.TWIST_SATURATED] if flag & SATURATED else []
-    if flag & RATE_LIMITED:
-        statuses.append(Status.RATE_LIMITED)
-    if flag & CLAMPED:
-        statuses.append(Status.JOINT_LIMIT)
-    return _STEP_WORDS.get(most_severe(*statuses), "moving")
-
-
-_CORE_WORDS = [_core_word(flag) for flag in range(2 * max(STEP_FLAGS.values()))]
-"""The status word of a step the core took, by its flags."""
+__all__ = [
+    "DIVERGENCE_FACTOR",
+    "MIN_TOL",
+    "STALL_IMPROVEMENT",
+    "STALL_MAX_STEPS",
+    "STALL_TIME_CONSTANTS",
+    "servo",
+]

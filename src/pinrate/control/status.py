@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from enum import Enum
+from types import MappingProxyType
 
 
 class Status(str, Enum):
@@ -40,11 +42,37 @@ class Status(str, Enum):
         """Rank of the status: higher is more severe (OK is 0)."""
         return SEVERITY.index(self)
 
+    @property
+    def word(self) -> str:
+        """The status in words (:data:`WORDS`): what the console shows, and what a
+        :class:`~pinrate.control.trajectory.Trajectory` and a teleop recording keep per step."""
+        return WORDS[self]
+
 
 SEVERITY: tuple[Status, ...] = tuple(Status)
 """Statuses from the least to the most severe: OK < TWIST_SATURATED < RATE_LIMITED <
 JOINT_LIMIT < WRIST_SINGULARITY < NEAR_SINGULARITY < DECELERATE_FOR_SINGULARITY <
 DECELERATE_FOR_COLLISION < AUXILIARY_ELBOW < FROZEN < HALT_FOR_SINGULARITY < HALT_FOR_COLLISION."""
+
+
+WORDS: Mapping[Status, str] = MappingProxyType(
+    {
+        Status.OK: "moving",
+        Status.TWIST_SATURATED: "speed limited",
+        Status.RATE_LIMITED: "rate limited",
+        Status.JOINT_LIMIT: "at a joint limit",
+        Status.WRIST_SINGULARITY: "wrist singularity",
+        Status.NEAR_SINGULARITY: "near singularity",
+        Status.DECELERATE_FOR_SINGULARITY: "near singularity: decelerating",
+        Status.DECELERATE_FOR_COLLISION: "near self-collision: decelerating",
+        Status.AUXILIARY_ELBOW: "auxiliary elbow active",
+        Status.FROZEN: "frozen joints",
+        Status.HALT_FOR_SINGULARITY: "near singularity: halted",
+        Status.HALT_FOR_COLLISION: "near self-collision: halted",
+    }
+)
+"""Each status in words: the one vocabulary of the console, servo trajectories and teleop
+recordings (a step's status is never said any other way)."""
 
 
 def most_severe(*statuses: Status) -> Status:

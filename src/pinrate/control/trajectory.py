@@ -14,11 +14,26 @@ import numpy as np
 from ..checks import check_output_file
 from ..errors import InputError, PinrateError
 from ..kinematics.partition import Partition
+from .status import Status
 
 _ARRAYS = ("q", "position_error", "orientation_error", "spectral_radius", "joint_rates")
 _TEXTS = ("reason", "algorithm", "linear", "angular")
-FORMAT = "pinrate-trajectory-1"
-"""The ``format`` entry of a saved trajectory: what :meth:`Trajectory.load` reads."""
+FORMAT = "pinrate-trajectory-2"
+"""The ``format`` entry of a saved trajectory: what :meth:`Trajectory.load` reads (and
+``pinrate-trajectory-1``, whose step words it renames by :data:`RENAMED_WORDS`)."""
+
+_FIRST_FORMAT = "pinrate-trajectory-1"
+
+RENAMED_WORDS = {
+    "saturated": Status.TWIST_SATURATED.word,
+    "joint limit": Status.JOINT_LIMIT.word,
+    "decelerating": Status.DECELERATE_FOR_SINGULARITY.word,
+    "slowing for collision": Status.DECELERATE_FOR_COLLISION.word,
+    "auxiliary elbow": Status.AUXILIARY_ELBOW.word,
+    "frozen": Status.FROZEN.word,
+}
+"""Step words of release 0.1.0 (format ``pinrate-trajectory-1``) that :data:`~pinrate.control.status.WORDS`
+renamed, old to new; its other words are unchanged."""
 
 
 @dataclass
@@ -30,12 +45,11 @@ class Trajectory:
         position_error: norm of the controlled position error (m), (N,).
         orientation_error: norm of the controlled rotation error (rad), (N,).
         spectral_radius: ρ of the smaller of G and H (inf where A or W is singular), (N,).
-        status: per configuration, "moving", "saturated" (TCP speed limit active), "joint
-            limit" (a joint held at a position limit), "rate limited" (a velocity limit bound),
-            "wrist singularity", "near singularity", "decelerating", "frozen" (the
-            singularity strategies, :mod:`pinrate.control.singularity`) or the final state
-            ("converged", "diverging", "stalled", "singular", "collision", "max steps";
-            see :mod:`pinrate.control.servo_loop`).
+        status: per configuration, the status of the step taken from it in words
+            (:attr:`Status.word <pinrate.Status.word>`: "moving", "speed limited", "at a joint
+            limit", "rate limited", …, the words the console shows), and for the last the
+            run's outcome ("converged", "diverging", "stalled", "singular", "collision", "max
+            steps"; see :mod:`pinrate.control.servo_loop`; "reversed" for a reversed run).
         joint_rates: the rates applied after each configuration but the last, (N - 1, nv).
         converged: both errors below tol at the last configuration.
         reason: why the run stopped, in words.
@@ -133,7 +147,8 @@ class Trajectory:
             raise InputError(f"{str(source)!r} is not a pinrate trajectory (not an .npz archive)")
         try:
             with np.load(source, allow_pickle=False) as data:
-                if "format" not in data.files or str(data["format"]) != FORMAT:
+                version = str(data["format"]) if "format" in data.files else ""
+                if version not in (FORMAT, _FIRST_FORMAT):
                     raise InputError(f"{str(source)!r} is not a pinrate trajectory (no format {FORMAT!r})")
                 missing = [
                     name
@@ -145,6 +160,8 @@ class Trajectory:
                 arrays = {name: np.array(data[name], dtype=float) for name in _ARRAYS}
                 texts = {name: str(data[name]) for name in _TEXTS}
                 status = [str(word) for word in data["status"]]
+                if version == _FIRST_FORMAT:
+                    status = [RENAMED_WORDS.get(word, word) for word in status]
                 detail = [str(words) for words in data["detail"]] if "detail" in data.files else []
                 arm, wrist = [str(j) for j in data["arm"]], [str(j) for j in data["wrist"]]
                 converged, dt = bool(data["converged"]), float(data["dt"])

@@ -26,21 +26,21 @@ GREY, GREEN, BLUE, AMBER, ORANGE, PURPLE, RED, BLACK = (
     "#111111",
 )
 
-WORDS: dict[Status, tuple[str, str]] = {
-    Status.OK: ("moving", GREEN),
-    Status.TWIST_SATURATED: ("speed limited", BLUE),
-    Status.RATE_LIMITED: ("rate limited", AMBER),
-    Status.JOINT_LIMIT: ("at a joint limit", ORANGE),
-    Status.WRIST_SINGULARITY: ("wrist singularity", ORANGE),
-    Status.NEAR_SINGULARITY: ("near singularity", ORANGE),
-    Status.DECELERATE_FOR_SINGULARITY: ("near singularity: decelerating", ORANGE),
-    Status.DECELERATE_FOR_COLLISION: ("near self-collision: decelerating", ORANGE),
-    Status.AUXILIARY_ELBOW: ("auxiliary elbow active", PURPLE),
-    Status.FROZEN: ("frozen joints", RED),
-    Status.HALT_FOR_SINGULARITY: ("near singularity: halted", RED),
-    Status.HALT_FOR_COLLISION: ("near self-collision: halted", RED),
+COLOURS: dict[Status, str] = {
+    Status.OK: GREEN,
+    Status.TWIST_SATURATED: BLUE,
+    Status.RATE_LIMITED: AMBER,
+    Status.JOINT_LIMIT: ORANGE,
+    Status.WRIST_SINGULARITY: ORANGE,
+    Status.NEAR_SINGULARITY: ORANGE,
+    Status.DECELERATE_FOR_SINGULARITY: ORANGE,
+    Status.DECELERATE_FOR_COLLISION: ORANGE,
+    Status.AUXILIARY_ELBOW: PURPLE,
+    Status.FROZEN: RED,
+    Status.HALT_FOR_SINGULARITY: RED,
+    Status.HALT_FOR_COLLISION: RED,
 }
-"""Each status as the console says it, and its colour."""
+"""Each status's colour on the console (its words are :attr:`Status.word <pinrate.Status.word>`)."""
 
 
 @dataclass(frozen=True)
@@ -66,7 +66,7 @@ def describe(step: Step | None, *, halted: bool = False, reversing: bool = False
         return Said(f"dead man: {dead_man}", BLACK, detail, ())
     if step is None:
         return Said("idle", GREY, "", ())
-    word, colour = WORDS[step.status]
+    word, colour = step.status.word, COLOURS[step.status]
     if step.status is Status.OK and not step.joint_rates.any():
         word, colour = "idle", GREY
     detail = step.detail
@@ -74,7 +74,7 @@ def describe(step: Step | None, *, halted: bool = False, reversing: bool = False
         detail = f"{detail}; frozen: {', '.join(step.frozen)}" if detail else f"frozen: {', '.join(step.frozen)}"
     if reversing:
         word = f"reversing: {word}"
-    return Said(word, colour, detail, tuple(WORDS[condition][0] for condition in step.conditions))
+    return Said(word, colour, detail, tuple(condition.word for condition in step.conditions))
 
 
 @dataclass(frozen=True)
@@ -134,4 +134,4 @@ def joint_values(robot: Robot, q: np.ndarray) -> list[float | None]:
     return values
 
 
-__all__ = ["WORDS", "JointGauge", "Said", "describe", "joint_gauges", "joint_values"]
+__all__ = ["COLOURS", "JointGauge", "Said", "describe", "joint_gauges", "joint_values"]

@@ -19,11 +19,16 @@ import numpy as np
 
 from ..checks import MAX_SAMPLES, check_count, check_output_file, check_positive
 from ..control.controller import Step
+from ..control.status import Status
 from ..errors import InputError, PinrateError
 from ..kinematics.manipulator import Robot
 
-FORMAT = "pinrate-teleop-1"
-"""The ``format`` entry of a saved recording: what :meth:`Recording.load` reads."""
+FORMAT = "pinrate-teleop-2"
+"""The ``format`` entry of a saved recording: what :meth:`Recording.load` reads (it reads
+``pinrate-teleop-1`` too, whose status column held :class:`~pinrate.Status` values instead of
+their words)."""
+
+_FIRST_FORMAT = "pinrate-teleop-1"
 
 
 CHUNK = 2048
@@ -98,7 +103,7 @@ class Recording:
             stamp = self._ticks[-1][0]
         q = np.array(step.q, dtype=float)
         rates = np.array(step.joint_rates, dtype=float)
-        self._ticks.append((stamp, q, rates, step.status.value, step.detail))
+        self._ticks.append((stamp, q, rates, step.status.word, step.detail))
 
     def _column(self, index: int) -> list:
         return [tick[index] for tick in self._ticks]
@@ -126,7 +131,8 @@ class Recording:
 
     @property
     def status(self) -> np.ndarray:
-        """Each tick's :class:`~pinrate.Status` value, (N,) strings."""
+        """Each tick's status in words (:attr:`Status.word <pinrate.Status.word>`, as the
+        console says it and a servo trajectory keeps it), (N,) strings."""
         return converted(self._column(3), str)
 
     @property
@@ -185,7 +191,8 @@ class Recording:
         columns do not fit together (lengths, widths, times that decrease)."""
         try:
             with np.load(Path(path), allow_pickle=False) as data:
-                if str(data["format"]) != FORMAT:
+                version = str(data["format"])
+                if version not in (FORMAT, _FIRST_FORMAT):
                     raise PinrateError(f"{path}: not a pinrate teleop recording (format {data['format']})")
                 times = np.asarray(data["times"], dtype=float)
                 q, rates = data["q"], data["joint_rates"]
@@ -207,6 +214,11 @@ class Recording:
         recording.nq, recording.nv = q.shape[1], rates.shape[1]
         if start.size:
             recording.start = np.array(start, dtype=float)
+        if version == _FIRST_FORMAT:
+            try:
+                status = np.array([Status(str(value)).word for value in status], dtype=str)
+            except ValueError as error:
+                raise InputError(f"{path}: {error}") from None
         for time, configuration, rate, word, reason in zip(times, q, rates, status, detail, strict=True):
             recording._ticks.append((float(time), configuration, rate, str(word), str(reason)))
         return recording

@@ -18,6 +18,13 @@ from ..robot_facts import Limit
 from ..status import Status
 
 
+def reached_detail(limit: Limit, value: float) -> str:
+    """A step's detail when ``limit``'s joint was clamped onto it at ``value`` (its lower or
+    upper bound; the one wording, whichever path took the step)."""
+    side, bound = ("lower", limit.lower) if value == limit.lower else ("upper", limit.upper)
+    return f"{limit.joint} reached its {side} limit {bound:.4g}"
+
+
 class PositionLimits:
     """The 1-DOF joints' position limits of a controller.
 
@@ -96,9 +103,8 @@ class PositionLimits:
         for limit in self.limits:
             value = q[limit.q_index]
             if value < limit.lower or value > limit.upper:
-                side, bound = ("lower", limit.lower) if value < limit.lower else ("upper", limit.upper)
-                q[limit.q_index] = bound
-                hit = hit or f"{limit.joint} reached its {side} limit {bound:.4g}"
+                q[limit.q_index] = limit.lower if value < limit.lower else limit.upper
+                hit = hit or reached_detail(limit, q[limit.q_index])
         return hit
 
 

@@ -34,6 +34,16 @@ def per_joint(limits: object, what: str, robot: Robot) -> np.ndarray:
     return values
 
 
+def scaled_detail(scale: float) -> str:
+    """A step's detail when the velocity limits scaled its rates by ``scale`` (the one
+    wording, whichever path took the step). Three significant digits, more where three would
+    round a scale just under 1 to "1" (a limit that bound must never read as no scaling)."""
+    digits = 3
+    while f"{scale:.{digits}g}" == "1" and digits < 17:
+        digits += 1
+    return f"rates scaled by {scale:.{digits}g} to meet the velocity limits"
+
+
 class VelocityLimits:
     """Per velocity component (nv,) limits in rad/s or m/s, inf where there is none."""
 
@@ -58,7 +68,7 @@ class VelocityLimits:
         if scale < 1.0:
             rates = rates * scale
             statuses.append(Status.RATE_LIMITED)
-            details.append(f"rates scaled by {scale:.3g} to meet the velocity limits")
+            details.append(scaled_detail(scale))
         return rates
 
     def room(self, task: np.ndarray, null: np.ndarray) -> float:
