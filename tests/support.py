@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -127,3 +128,37 @@ def wait_for(condition: Callable[[], object], timeout: float = 5.0) -> bool:
             return True
         time.sleep(0.01)
     return bool(condition())
+
+
+KINDS = ("revolute", "prismatic", "continuous", "fixed")
+
+
+def numbers(values: np.ndarray) -> str:
+    return " ".join(f"{value:.6g}" for value in values)
+
+
+def random_urdf(rng: np.random.Generator) -> str:
+    """A tree of 2-12 links: mostly a chain, with branches; revolute, prismatic, continuous
+    and fixed joints; odd axes (any direction, any length); zero-length links."""
+    count = int(rng.integers(2, 13))
+    links = [f'<link name="link{i}"/>' for i in range(count)]
+    joints = []
+    for child in range(1, count):
+        parent = child - 1 if rng.random() < 0.75 else int(rng.integers(0, child))
+        kind = "revolute" if child == 1 else KINDS[int(rng.choice(4, p=[0.4, 0.2, 0.2, 0.2]))]
+        xyz = np.zeros(3) if rng.random() < 0.2 else rng.normal(0.0, 0.3, 3)
+        rpy = np.zeros(3) if rng.random() < 0.4 else rng.uniform(-math.pi, math.pi, 3)
+        axis = np.eye(3)[int(rng.integers(3))] * rng.choice([-1.0, 1.0]) if rng.random() < 0.5 else rng.normal(0, 1, 3)
+        if np.linalg.norm(axis) < 1e-3:
+            axis = np.array([0.0, 0.0, 1.0])
+        inner = f'<origin xyz="{numbers(xyz)}" rpy="{numbers(rpy)}"/><axis xyz="{numbers(axis)}"/>'
+        if kind == "revolute":
+            lower = rng.uniform(-3.0, 0.0)
+            inner += f'<limit lower="{lower:.6g}" upper="{lower + rng.uniform(0.2, 3.0):.6g}" effort="1" velocity="1"/>'
+        elif kind == "prismatic":
+            inner += '<limit lower="-0.4" upper="0.6" effort="1" velocity="1"/>'
+        joints.append(
+            f'<joint name="joint{child}" type="{kind}"><parent link="link{parent}"/>'
+            f'<child link="link{child}"/>{inner}</joint>'
+        )
+    return '<robot name="random">' + "".join(links) + "".join(joints) + "</robot>"

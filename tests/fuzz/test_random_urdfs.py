@@ -4,7 +4,6 @@ exception, a NaN or a crash. Seeded and bounded; PINRATE_FUZZ_SCALE runs more.""
 
 from __future__ import annotations
 
-import math
 import re
 from pathlib import Path
 
@@ -12,40 +11,7 @@ import numpy as np
 import pytest
 
 import pinrate
-from support import finite_difference_jacobian, fuzz_count
-
-KINDS = ("revolute", "prismatic", "continuous", "fixed")
-
-
-def numbers(values: np.ndarray) -> str:
-    return " ".join(f"{value:.6g}" for value in values)
-
-
-def random_urdf(rng: np.random.Generator) -> str:
-    """A tree of 2-12 links: mostly a chain, with branches; revolute, prismatic, continuous
-    and fixed joints; odd axes (any direction, any length); zero-length links."""
-    count = int(rng.integers(2, 13))
-    links = [f'<link name="link{i}"/>' for i in range(count)]
-    joints = []
-    for child in range(1, count):
-        parent = child - 1 if rng.random() < 0.75 else int(rng.integers(0, child))
-        kind = "revolute" if child == 1 else KINDS[int(rng.choice(4, p=[0.4, 0.2, 0.2, 0.2]))]
-        xyz = np.zeros(3) if rng.random() < 0.2 else rng.normal(0.0, 0.3, 3)
-        rpy = np.zeros(3) if rng.random() < 0.4 else rng.uniform(-math.pi, math.pi, 3)
-        axis = np.eye(3)[int(rng.integers(3))] * rng.choice([-1.0, 1.0]) if rng.random() < 0.5 else rng.normal(0, 1, 3)
-        if np.linalg.norm(axis) < 1e-3:
-            axis = np.array([0.0, 0.0, 1.0])
-        inner = f'<origin xyz="{numbers(xyz)}" rpy="{numbers(rpy)}"/><axis xyz="{numbers(axis)}"/>'
-        if kind == "revolute":
-            lower = rng.uniform(-3.0, 0.0)
-            inner += f'<limit lower="{lower:.6g}" upper="{lower + rng.uniform(0.2, 3.0):.6g}" effort="1" velocity="1"/>'
-        elif kind == "prismatic":
-            inner += '<limit lower="-0.4" upper="0.6" effort="1" velocity="1"/>'
-        joints.append(
-            f'<joint name="joint{child}" type="{kind}"><parent link="link{parent}"/>'
-            f'<child link="link{child}"/>{inner}</joint>'
-        )
-    return '<robot name="random">' + "".join(links) + "".join(joints) + "</robot>"
+from support import finite_difference_jacobian, fuzz_count, random_urdf
 
 
 @pytest.mark.parametrize("seed", range(fuzz_count(150)))
