@@ -152,8 +152,7 @@ class Servo {
       double twist[6];
       for (int r = 0; r < s_.m + k_; ++r) twist[r] = gain * error[r];
       int flags = 0;
-      if (saturate(twist, s_.m, s_.max_linear_speed)) flags |= SATURATED;
-      if (saturate(twist + s_.m, k_, s_.max_angular_speed)) flags |= SATURATED;
+      if (saturate(twist)) flags |= SATURATED;
       const double bound = conditioning_bound(parts, R);
       // Under the cheap bound, the SVDs decide (Controller._plan): in the singular region a
       // plan, which Python makes; above it after all, the algorithm as it is.
@@ -197,15 +196,17 @@ class Servo {
   Settings s_;
   int n_ = 0, k_ = 0;
 
-  // spatial.saturate: scaled down, direction kept, to norm <= limit.
-  static bool saturate(double *values, int count, double limit) {
-    const double norm = std::sqrt(dot(values, values, count));
-    if (norm > limit) {
-      const double factor = limit / norm;
-      for (int i = 0; i < count; ++i) values[i] = values[i] * factor;
-      return true;
-    }
-    return false;
+  // spatial.saturate_twist: the whole twist scaled by one factor, the largest that meets both
+  // speed limits, so the commanded screw keeps its direction (the same operations as Python).
+  bool saturate(double *twist) const {
+    double factor = 1.0;
+    const double linear = std::sqrt(dot(twist, twist, s_.m));
+    const double angular = std::sqrt(dot(twist + s_.m, twist + s_.m, k_));
+    if (linear > s_.max_linear_speed) factor = s_.max_linear_speed / linear;
+    if (angular > s_.max_angular_speed) factor = std::fmin(factor, s_.max_angular_speed / angular);
+    if (!(factor < 1.0)) return false;
+    for (int i = 0; i < s_.m + k_; ++i) twist[i] = twist[i] * factor;
+    return true;
   }
 
   static double max_abs(const Vector &rates) {

@@ -28,12 +28,19 @@ def test_a_twist_step_is_joint_rates_integrated(ur5: pinrate.Robot, algorithm: s
     np.testing.assert_allclose(step.observation.jacobian, ur5.jacobian(q), atol=1e-15)
 
 
-def test_saturation_keeps_the_direction(ur5: pinrate.Robot) -> None:
+def test_saturation_scales_the_whole_twist_by_one_factor(ur5: pinrate.Robot) -> None:
+    """Contract v2.1: |v| = 0.5 against 0.1 asks for 0.2, |ω| = 2 against 0.2 for 0.1; the
+    one factor is the smaller, 0.1, for every component: the screw keeps its direction."""
     controller = Controller(ur5, max_linear_speed=0.1, max_angular_speed=0.2)
     twist = np.array([0.3, 0.4, 0.0, 0.0, 0.0, 2.0])
     step = controller.step(ur5.home(), twist)
     assert step.status is Status.TWIST_SATURATED
-    np.testing.assert_allclose(step.twist, [0.06, 0.08, 0.0, 0.0, 0.0, 0.2])
+    np.testing.assert_allclose(step.twist, [0.03, 0.04, 0.0, 0.0, 0.0, 0.2], rtol=1e-15)
+    # Only the linear part over its limit: the angular part shrinks by the same factor.
+    step = controller.step(ur5.home(), np.array([0.0, 0.0, 1.0, 0.1, 0.0, 0.0]))
+    np.testing.assert_allclose(step.twist, [0.0, 0.0, 0.1, 0.01, 0.0, 0.0], rtol=1e-15)
+    # Both within their limits: untouched.
+    assert controller.step(ur5.home(), np.array([0.1, 0, 0, 0, 0, 0.2])).status is Status.OK
 
 
 def test_a_pose_goal_commands_gain_times_the_error(ur5: pinrate.Robot) -> None:

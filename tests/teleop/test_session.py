@@ -86,6 +86,17 @@ def test_deflections_are_clipped_and_the_hand_never_exceeds_the_max_speed(ur5):
     assert step.status is Status.TWIST_SATURATED
 
 
+def test_a_command_over_the_linear_speed_keeps_its_screw(ur5):
+    """Contract v2.1: two linear axes fully deflected (|v| = sqrt(2) x 0.05 m/s) and one angular
+    (0.25 rad/s, within its limit) are scaled by one factor, 1/sqrt(2): the hand moves along
+    the commanded screw, slower (scaling the linear part alone would turn it less per metre)."""
+    teleop = Teleop(ur5, dt=DT, max_linear_speed=0.05, max_angular_speed=0.25)
+    teleop.command([1, 1, 0], [0, 0, 1], now=0.0)
+    step = teleop.tick(0.0)
+    np.testing.assert_allclose(step.twist, np.array([0.05, 0.05, 0, 0, 0, 0.25]) / np.sqrt(2), rtol=1e-12)
+    assert step.status is Status.TWIST_SATURATED
+
+
 def test_dead_man_zeroes_a_stale_command(ur5):
     teleop = Teleop(ur5, dt=DT, timeout=0.25)
     teleop.command([1, 0, 0], [0, 0, 0], now=10.0)

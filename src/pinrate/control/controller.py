@@ -40,7 +40,7 @@ from ..compiled import CoreServo
 from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
-from ..kinematics.spatial import pose_error, saturate
+from ..kinematics.spatial import pose_error, saturate_twist
 from ..solvers import closed_form
 from ..solvers.conditioning import row_scale
 from ..solvers.registry import check_algorithm
@@ -297,7 +297,8 @@ class Controller:
 
     # ------------------------------------------------------------------ acting
     def command_twist(self, observation: Observation, command: np.ndarray | PoseGoal) -> tuple[np.ndarray, bool]:
-        """(twist, saturated): the command as a saturated twist in partition order, sensor axes."""
+        """(twist, saturated): the command as a twist in partition order, sensor axes,
+        saturated by one factor (:func:`~pinrate.kinematics.spatial.saturate_twist`)."""
         m = self.index.m
         if isinstance(command, PoseGoal):
             error = observation.error if observation.goal is command else None
@@ -306,9 +307,7 @@ class Controller:
             wanted = command.gain * error
         else:
             wanted = command
-        linear, saturated_linear = saturate(wanted[:m], self.max_linear_speed)
-        angular, saturated_angular = saturate(wanted[m:], self.max_angular_speed)
-        return np.concatenate([linear, angular]), saturated_linear or saturated_angular
+        return saturate_twist(np.array(wanted, dtype=float), m, self.max_linear_speed, self.max_angular_speed)
 
     def step(self, q: object, command: object, *, observation: Observation | None = None) -> Step:
         """One control step from q: command -> twist -> joint rates -> next q.

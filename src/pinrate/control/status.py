@@ -17,6 +17,14 @@ class Status(str, Enum):
     (``singularity="generalized_inverse"`` or ``"adaptive_dls"``), or, with ``"decelerate"``,
     a step that raises the conditioning and is executed unscaled.
 
+    ``UNACHIEVABLE_TWIST`` (contract v2.1, the honest step; just above RATE_LIMITED): the
+    partition's joints cannot make the commanded twist at q, whatever the limits (fewer joints
+    than controlled components, or a J whose rank is below their number at almost every
+    configuration): the step moves by the least-squares part of it and ``Step.detail`` gives
+    the residual. A step whose motion a limit or a singularity strategy bent says so with that
+    member instead; so no step reports OK or TWIST_SATURATED while it departs from the twist
+    its algorithm makes of the command.
+
     Two more rank the self-collision monitor's verdicts (:mod:`pinrate.control.collision`):
     ``DECELERATE_FOR_COLLISION``, the nearest pair of links is closer than the safety distance
     and the step, which brings them closer, is scaled down (just above
@@ -27,6 +35,7 @@ class Status(str, Enum):
     OK = "ok"
     TWIST_SATURATED = "twist_saturated"
     RATE_LIMITED = "rate_limited"
+    UNACHIEVABLE_TWIST = "unachievable_twist"
     JOINT_LIMIT = "joint_limit"
     WRIST_SINGULARITY = "wrist_singularity"
     NEAR_SINGULARITY = "near_singularity"
@@ -51,7 +60,7 @@ class Status(str, Enum):
 
 SEVERITY: tuple[Status, ...] = tuple(Status)
 """Statuses from the least to the most severe: OK < TWIST_SATURATED < RATE_LIMITED <
-JOINT_LIMIT < WRIST_SINGULARITY < NEAR_SINGULARITY < DECELERATE_FOR_SINGULARITY <
+UNACHIEVABLE_TWIST < JOINT_LIMIT < WRIST_SINGULARITY < NEAR_SINGULARITY < DECELERATE_FOR_SINGULARITY <
 DECELERATE_FOR_COLLISION < AUXILIARY_ELBOW < FROZEN < HALT_FOR_SINGULARITY < HALT_FOR_COLLISION."""
 
 
@@ -60,6 +69,7 @@ WORDS: Mapping[Status, str] = MappingProxyType(
         Status.OK: "moving",
         Status.TWIST_SATURATED: "speed limited",
         Status.RATE_LIMITED: "rate limited",
+        Status.UNACHIEVABLE_TWIST: "twist out of reach",
         Status.JOINT_LIMIT: "at a joint limit",
         Status.WRIST_SINGULARITY: "wrist singularity",
         Status.NEAR_SINGULARITY: "near singularity",

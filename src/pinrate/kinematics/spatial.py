@@ -48,3 +48,24 @@ def saturate(values: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
     if length > limit:
         return values * (limit / length), True
     return values, False
+
+
+def saturate_twist(
+    twist: np.ndarray, m: int, max_linear_speed: float, max_angular_speed: float
+) -> tuple[np.ndarray, bool]:
+    """The twist (linear rows ``twist[:m]`` in m/s, then angular in rad/s, any one frame's
+    axes) scaled by ONE factor, the largest that meets both speed limits (contract v2.1):
+
+        s = min(1, max_linear_speed / |v|, max_angular_speed / |ω|),    twist <- s twist,
+
+    so the commanded screw keeps its direction (scaling the two parts apart would bend it);
+    and whether it was scaled. The compiled core computes s with the same operations."""
+    factor = 1.0
+    linear, angular = norm(twist[:m]), norm(twist[m:])
+    if linear > max_linear_speed:
+        factor = max_linear_speed / linear
+    if angular > max_angular_speed:
+        factor = min(factor, max_angular_speed / angular)
+    if factor < 1.0:
+        return twist * factor, True
+    return twist, False

@@ -30,6 +30,7 @@ COLOURS: dict[Status, str] = {
     Status.OK: GREEN,
     Status.TWIST_SATURATED: BLUE,
     Status.RATE_LIMITED: AMBER,
+    Status.UNACHIEVABLE_TWIST: ORANGE,
     Status.JOINT_LIMIT: ORANGE,
     Status.WRIST_SINGULARITY: ORANGE,
     Status.NEAR_SINGULARITY: ORANGE,
