@@ -25,7 +25,8 @@ class WayBack:
         history: s of motion kept.
 
     Attributes:
-        clock: the motion clock (s): the time of the record's newest sample.
+        clock: the motion clock (s), advanced by dt on each tick that moves the robot;
+            the record's newest sample, when there is one, is at it.
         playback: the reversal running, or None.
         reversed_at: the ``now`` (s) of the :meth:`~.session.Teleop.reverse` call the
             reversal serves: only a command dated after it ends the reversal.
