@@ -9,7 +9,7 @@ module of its own, in this order:
 2. **command → twist**: a twist is taken as it is; a :class:`PoseGoal` commands ``gain``
    times the pose error, position error R_s^T (p_target - p_tip) and rotation error
    R_s^T log3(R_target R_tip^T); a :class:`JointJog` or an :class:`Uncoupled` command
-   names joint rates instead (:mod:`.uncoupled`);
+   names joint rates instead (:mod:`.joint_space`, :mod:`.uncoupled`);
 3. **bound**: the linear and the angular parts are each scaled down, direction kept, to at
    most ``max_linear_speed`` and ``max_angular_speed``;
 4. **plan**: where a cheap conditioning bound says the step may be in the singular region,
@@ -17,11 +17,12 @@ module of its own, in this order:
    (:mod:`.singularity`: one module per strategy); Barker's auxiliary elbow takes the step
    near full extension;
 5. **solve**: the algorithm (:mod:`pinrate.solvers`), or the plan's inversion, turns the
-   twist into joint rates; a posture task adds null-space motion (:mod:`.posture`);
+   twist into joint rates; a posture task adds null-space motion (:mod:`.posture`); which
+   solve runs is :mod:`.solve`'s choice;
 6. **limits**, in a fixed order (:mod:`.limits`): position (joints held at a limit, the
    others solved again), then the decelerating strategies' one-step look-ahead, velocity
    (one scale factor), acceleration (a blend from the last rates), self-collision
-   (:mod:`.collision`);
+   (:mod:`.collision`); from velocity on, every step ends alike (:mod:`.finish`);
 7. **integrate**: q over dt on the configuration space (``pin.integrate``), clamped to the
    limits (a guard against rounding: the position stage already keeps q inside);
 8. **rank** the conditions met: the :class:`~.observation.Step`'s status is the most severe
@@ -29,9 +30,6 @@ module of its own, in this order:
 """
 
 from __future__ import annotations
-
-import inspect
-from collections.abc import Callable
 
 import numpy as np
 
@@ -46,29 +44,22 @@ from ..solvers.conditioning import row_scale
 from ..solvers.registry import check_algorithm
 from . import compiled_twin
 from .collision import monitor_for
-from .commands import JointJog, PoseGoal, Uncoupled, joint_rate_vector
+from .commands import JointJog, PoseGoal, Uncoupled
 from .context import StepContext
 from .elbow import Elbow
+from .finish import Finish
+from .joint_space import JointSpace
 from .limits import AccelerationLimits, PositionLimits, VelocityLimits, per_joint
 from .observation import Observation, Step, error_norms
+from .options import MAX_ANGULAR_SPEED, MAX_LINEAR_SPEED, option_names
 from .posture import PostureTask
 from .robot_facts import Limit, robot_facts
 from .singular_region import Conditioning, check_strategy, check_thresholds, measured_blocks
-from .singularity import RULES, SINGULAR_THRESHOLD, SLOW_THRESHOLD, STRATEGIES, WRIST_STRATEGIES, Plan, plan_step
-from .singularity.auxiliary_elbow import Auxiliary, AuxiliaryElbow
+from .singularity import RULES, SINGULAR_THRESHOLD, SLOW_THRESHOLD, STRATEGIES, WRIST_STRATEGIES, plan_step
+from .singularity.auxiliary_elbow import AuxiliaryElbow
 from .singularity.decelerate import decelerate, watched
-from .singularity.plan import solve_planned
-from .status import Status, ranked
-from .uncoupled import WristCentre
-
-MAX_LINEAR_SPEED = 0.5
-"""Default speed limit of the commanded TCP velocity (m/s)."""
-
-MAX_ANGULAR_SPEED = 1.0
-"""Default speed limit of the commanded angular velocity (rad/s)."""
-
-Solve = Callable[[frozenset[str]], np.ndarray]
-"""A step's solve: rates (nv,) with the given joints left out (held at a position limit)."""
+from .solve import TwistSolver
+from .status import Status
 
 
 class Controller:
@@ -206,8 +197,6 @@ class Controller:
             if self.acceleration_limits is None
             else AccelerationLimits(self.acceleration_limits, self.dt, facts.velocity_of, self._positions)
         )
-        self._wrist_axes, self._wrist_body = facts.wrist_axes, facts.wrist_body
-        self._wrist_centre: WristCentre | None = None  # Uncoupled commands' own, made on first use
         self.posture_gain = check_positive(posture_gain, "posture_gain")
         self.posture = None if posture is None else PostureTask(self.context, posture, self.posture_gain)
         """The secondary task (:class:`~.posture.PostureTask`), or None."""
@@ -221,12 +210,17 @@ class Controller:
         when ``singularity="auxiliary_elbow"`` found an elbow, else None."""
         if self.auxiliary is not None:
             self.elbow_region = self.auxiliary.region
+        self._solver = TwistSolver(self.context, self.auxiliary, self.posture, self.rate_limits)
+        self._finish = Finish(
+            robot, self.dt, self._positions, self.rate_limits, self._accelerations, self.collision, self.auxiliary
+        )
+        self._joint_space = JointSpace(self.context, facts, self._positions, self._finish)
         self._built = True
 
     def __setattr__(self, name: str, value: object) -> None:
         # The stages copied the options when the controller was built: one changed afterwards
         # would act in some of them and not in others. Refused, with the way to do it.
-        if name in _options(Controller) and getattr(self, "_built", False):
+        if name in option_names(Controller) and getattr(self, "_built", False):
             raise AttributeError(
                 f"Controller.{name} is fixed when the controller is built: build a new Controller "
                 "(Teleop.configure does so for a console)"
@@ -251,7 +245,7 @@ class Controller:
         missing from that table is not covered (fails closed)."""
         if type(self).step is not Controller.step:
             return f"{type(self).__name__} steps its own way: its loops run on the Python path"
-        return compiled_twin.reason(self, _options(type(self)))
+        return compiled_twin.reason(self, option_names(type(self)))
 
     def position_limit(self, number: int) -> Limit:
         """The ``number``-th position limit the controller keeps (the compiled core names a
@@ -330,7 +324,7 @@ class Controller:
         if observation is None:
             observation = self.observe(q)
         if isinstance(command, (JointJog, Uncoupled)):
-            return self._joint_space(observation, command)
+            return self._joint_space.step(observation, command)
         if not isinstance(command, PoseGoal):
             command = check_vector(command, self.index.rows.size, "twist (linear then angular components)")
         twist, saturated = self.command_twist(observation, command)
@@ -348,7 +342,7 @@ class Controller:
             rates = solve(frozenset())
             rates, frozen = self._positions.hold(observation, rates, solve, statuses, details, frozen)
         except SingularBlockError as singular:
-            return self._halt(observation, twist, str(singular))
+            return self._finish.halt(observation, twist, str(singular))
         judged = (
             watched(self.context, observation, plan, bound, rates)
             if auxiliary is None and self.rule.decelerates
@@ -357,133 +351,17 @@ class Controller:
         if judged is not None:
             scale, status, detail = decelerate(self.context, observation, rates, *judged)
             if status is Status.HALT_FOR_SINGULARITY:
-                return self._halt(observation, twist, detail)
+                return self._finish.halt(observation, twist, detail)
             if status is not Status.OK:
                 rates = rates * scale
                 statuses.append(status)
                 details.append(detail)  # NEAR_SINGULARITY: a way out, scale 1
         return self._finish(observation, twist, rates, statuses, details, frozen)
 
-    def _solver(
-        self,
-        observation: Observation,
-        twist: np.ndarray,
-        auxiliary: Auxiliary | None,
-        plan: Plan | None,
-        statuses: list[Status],
-        details: list[str],
-    ) -> tuple[Solve, tuple[str, ...]]:
-        """(solve, frozen): the step's solve for the auxiliary elbow, a plan or the algorithm
-        (with the posture task's null-space motion outside the singular region), the plan's
-        conditions appended to ``statuses`` and ``details``."""
-        context = self.context
-        if auxiliary is not None:
-            elbow = self.auxiliary
-            assert elbow is not None
-            statuses.extend(auxiliary.statuses)
-            details.extend(auxiliary.details)
-            return (lambda left_out: elbow.solve(observation, twist, auxiliary, left_out)), ()
-        if plan is not None:
-            statuses.extend(plan.statuses)
-            details.extend(plan.details)
-            return (lambda left_out: solve_planned(context, observation, twist, plan, left_out)), plan.frozen
-        posture = self.posture
-        if posture is None:
-            return (lambda left_out: context.solve_without(observation, twist, left_out)), ()
-
-        def with_posture(left_out: frozenset[str]) -> np.ndarray:
-            rates = context.solve_without(observation, twist, left_out)
-            null = posture.null_motion(observation, left_out)
-            return rates + self.rate_limits.room(rates, null) * null
-
-        return with_posture, ()
-
-    def _joint_space(self, observation: Observation, command: JointJog | Uncoupled) -> Step:
-        """A joint jog (the named joints at their rates, the others still) or an uncoupled
-        command (:mod:`.uncoupled`); then the limits. ``Step.twist`` is the twist the rates
-        produce at q (partition rows, sensor axes)."""
-        statuses: list[Status] = []
-        details: list[str] = []
-        if isinstance(command, JointJog):
-            velocity_of = self.context.velocity_of
-            requested = joint_rate_vector(command.rates, self.joggable, velocity_of, self.robot.nv, "JointJog")
-
-            def jog(left_out: frozenset[str]) -> np.ndarray:
-                rates = requested.copy()
-                for name in left_out:
-                    rates[velocity_of[name]] = 0.0
-                return rates
-
-            solve: Solve = jog
-            rates = requested.copy()
-        else:
-            if self._wrist_centre is None:
-                self._wrist_centre = WristCentre(self.context, self._wrist_axes, self._wrist_body)
-            solve = self._wrist_centre.solver(observation, command, statuses, details)
-            rates = solve(frozenset())
-        rates, frozen = self._positions.hold(observation, rates, solve, statuses, details, ())
-        step = self._finish(observation, np.zeros(self.index.rows.size), rates, statuses, details, frozen)
-        step.twist = self.context.reduced_rows(observation.jacobian) @ step.joint_rates
-        return step
-
-    def _finish(
-        self,
-        observation: Observation,
-        twist: np.ndarray,
-        rates: np.ndarray,
-        statuses: list[Status],
-        details: list[str],
-        frozen: tuple[str, ...],
-    ) -> Step:
-        """The end of every step: velocity limits (one scale factor), acceleration limits,
-        self-collision, integration over dt, the clamp to the position limits, the status."""
-        rates = self.rate_limits.apply(rates, statuses, details)
-        if self._accelerations is not None:
-            rates = self._accelerations.apply(observation.q, rates, frozen, statuses, details)
-        if self.collision is not None:
-            verdict = self.collision.limit(observation.q, rates, self.dt)
-            if verdict.status is Status.HALT_FOR_COLLISION:
-                return self._halt(observation, twist, verdict.detail, Status.HALT_FOR_COLLISION)
-            if verdict.scale < 1.0:
-                rates = rates * verdict.scale
-                statuses.append(verdict.status)
-                details.append(verdict.detail)
-        if self._accelerations is not None:
-            self._accelerations.remember(rates)  # the rates applied, after every scaling
-        next_q = self.robot.integrate(observation.q, rates, self.dt)
-        if self.auxiliary is not None:
-            self.auxiliary.reach_extension(observation.q, next_q)
-        if self.position_limits:
-            hit = self._positions.clamp(next_q)
-            if hit and Status.JOINT_LIMIT not in statuses:
-                statuses.append(Status.JOINT_LIMIT)
-                details.append(hit)
-        conditions = ranked(statuses)
-        status = conditions[-1] if conditions else Status.OK
-        return Step(next_q, rates, status, frozen, twist, observation, "; ".join(details), conditions)
-
-    def _halt(
-        self, observation: Observation, twist: np.ndarray, detail: str, status: Status = Status.HALT_FOR_SINGULARITY
-    ) -> Step:
-        if self._accelerations is not None:
-            self._accelerations.reset()
-        return Step(observation.q.copy(), np.zeros(self.robot.nv), status, (), twist, observation, detail, (status,))
-
-
-_OPTIONS_OF: dict[type, tuple[str, ...]] = {}
-
-
-def _options(kind: type) -> tuple[str, ...]:
-    """The parameters of a Controller class (a subclass's own included), whose coverage by
-    the compiled core is looked up by name."""
-    if kind not in _OPTIONS_OF:
-        _OPTIONS_OF[kind] = tuple(inspect.signature(kind).parameters)
-    return _OPTIONS_OF[kind]
-
 
 COMPILED_COVERAGE = compiled_twin.COMPILED_COVERAGE
 
-CONTROLLER_OPTIONS = tuple(name for name in _options(Controller) if name != "robot")
+CONTROLLER_OPTIONS = tuple(name for name in option_names(Controller) if name != "robot")
 """Every keyword option of :class:`Controller` (what :func:`~.servo_loop.servo` passes on)."""
 
 

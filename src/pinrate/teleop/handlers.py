@@ -4,7 +4,7 @@ The page, its script, stylesheet and heartbeat worker, meshcat's own ``main.min.
 (:func:`console_files`: read once at start, so nothing else on disk is reachable) and the
 recordings this server wrote, by name; every other path is 404. Every handler is
 :class:`Guarded`: :mod:`.access`'s rule (Host on every request, the token where the page
-needs it, no framing) and never a traceback. The WebSocket handler (:mod:`.protocol`) is
+needs it, no framing) and never a traceback. The WebSocket handler (:mod:`.page_socket`) is
 one too. The HTTP server (:func:`web_server`) caps what a client can cost:
 :data:`MAX_CONNECTIONS` connections (the oldest goes first) and :data:`HEADER_TIMEOUT` to
 send a request's headers.
@@ -143,7 +143,7 @@ class RecordingFile(Guarded):
 
 class CappedServer(tornado.httpserver.HTTPServer):
     """At most :data:`MAX_CONNECTIONS` HTTP connections (a socket that became a WebSocket
-    leaves tornado's count, and :data:`~.protocol.MAX_PAGES` caps those): a new one beyond
+    leaves tornado's count, and :data:`~.page_socket.MAX_PAGES` caps those): a new one beyond
     closes the oldest, so connections that never finish their headers cannot lock the page out."""
 
     def handle_stream(self, stream: tornado.iostream.IOStream, address: tuple[Any, ...]) -> None:

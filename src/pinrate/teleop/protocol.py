@@ -16,8 +16,9 @@ The first page controls; the others watch until the control is free and they tak
 ``claim``); a watcher may only halt. The controlling page's buttons become requests for the
 control thread (:attr:`Pages.requests`); its input becomes the Teleop's command at once.
 What one page can cost is capped: :data:`MAX_PAGES` sockets, :data:`MESSAGE_RATE` messages a
-second (a page that keeps flooding is disconnected), a claim broadcast only when the control
-changes hands; an unreadable message is answered, never raised.
+second (a page that keeps flooding is disconnected; the socket's rules are
+:mod:`.page_socket`'s), a claim broadcast only when the control changes hands; an unreadable
+message is answered, never raised.
 """
 
 from __future__ import annotations
@@ -25,7 +26,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
-import logging
 import math
 import queue
 import threading
@@ -34,28 +34,12 @@ from collections.abc import Callable
 from typing import Any
 
 import tornado.iostream
-import tornado.web
 import tornado.websocket
 
-from .access import AccessPolicy
 from .display import JointGauge
-from .handlers import Guarded
 from .mapping import deflections
+from .page_socket import FLOOD_LIMIT, MAX_PAGES, MESSAGE_BURST, MESSAGE_RATE, PageSocket
 from .session import Teleop
-
-MAX_PAGES = 8
-"""WebSocket clients (pages) connected at once; the next is refused (503)."""
-
-MESSAGE_RATE = 100.0
-"""Messages a second a page may send on average (its heartbeat is 20, plus one per change);
-:data:`MESSAGE_BURST` at once. Beyond, messages are dropped; a page that keeps flooding for
-:data:`FLOOD_LIMIT` dropped messages is disconnected."""
-
-MESSAGE_BURST = 200.0
-"""Messages a page may send at once before :data:`MESSAGE_RATE` applies."""
-
-FLOOD_LIMIT = 1000
-"""Dropped messages after which a flooding page is disconnected."""
 
 FREEZE_LIMIT = 1.5
 """s: how long the page's main thread may be silent while its heartbeat goes on (the page's
@@ -76,8 +60,6 @@ CLOCK_DRIFT = 1e-3
 """s/s: how fast the estimated offset between a page's clock and the server's may grow
 (clock rates differ by well under 1e-4 on NTP-disciplined machines)."""
 
-LOG = logging.getLogger("pinrate.teleop")
-
 
 def _retrieved(future: Any) -> None:
     """Done callback of every write and task: its failure (a page gone) is read, so asyncio
@@ -97,59 +79,6 @@ class _Busy:
 def _listed(value: object) -> list[Any]:
     """A message's list field, or [] when it is anything else."""
     return list(value) if isinstance(value, list) else []
-
-
-class PageSocket(Guarded, tornado.websocket.WebSocketHandler):
-    """One page. The handshake passes :class:`~.handlers.Guarded`'s checks, the Origin rule
-    and the cap; its messages are rate-limited, then read by its :class:`Pages`."""
-
-    def initialize(self, access: AccessPolicy, pages: Pages) -> None:
-        self.access = access
-        self.pages = pages
-        self.pending: Any = None  # the last frame's write, not yet done
-        self.client_id = 0
-        self.allowance = MESSAGE_BURST
-        self.refilled = time.monotonic()
-        self.dropped = 0
-        self.clock_offset = math.inf  # the least (arrival - the page's stamp) seen, s
-        self.offset_at = 0.0  # when clock_offset was last updated (monotonic s)
-
-    def refuse_beyond_host(self, policy: AccessPolicy) -> None:
-        """After the Host's (``Guarded.prepare``): the Origin, the token, the cap."""
-        if not policy.origin_allowed(self.request.headers.get("Origin"), self.request.host):
-            raise tornado.web.HTTPError(403, reason="Origin not allowed")
-        if not policy.token_allowed(self.get_query_argument("token", None)):
-            raise tornado.web.HTTPError(403, reason="token missing or wrong")
-        if len(self.pages.clients) >= MAX_PAGES:
-            raise tornado.web.HTTPError(503, reason=f"{MAX_PAGES} pages are connected already")
-
-    def check_origin(self, origin: str) -> bool:
-        return self.access.origin_allowed(origin, self.request.host)
-
-    def open(self, *args: str, **kwargs: str) -> None:
-        self.set_nodelay(True)
-        self.pages.open(self)
-
-    def on_message(self, message: str | bytes) -> None:
-        now = time.monotonic()
-        self.allowance = min(MESSAGE_BURST, self.allowance + (now - self.refilled) * MESSAGE_RATE)
-        self.refilled = now
-        if self.allowance >= MESSAGE_BURST:
-            self.dropped = 0  # calm again: the flood is over
-        if self.allowance < 1.0:
-            self.dropped += 1
-            if self.dropped >= FLOOD_LIMIT:
-                self.close(1008, "too many messages")
-            return
-        self.allowance -= 1.0
-        try:
-            self.pages.message(self, message, now)
-        except Exception:  # a message must never take the socket (or the console) down
-            LOG.debug("unreadable message", exc_info=True)
-            self.pages.send(self, {"type": "event", "level": "error", "text": "unreadable message"})
-
-    def on_close(self) -> None:
-        self.pages.close(self)
 
 
 Request = tuple[str, dict[str, Any], PageSocket | None]

@@ -15,9 +15,9 @@
   :data:`HEADER_TIMEOUT` to send a request's headers, :data:`MESSAGE_RATE` messages a
   second; the scene is encoded once and sent to each page one chunk at a time, and a page
   still busy with a frame skips the next.
-- **control**: :meth:`Teleop.tick` at the controller's rate (1/dt), sleeping to absolute
-  deadlines; a late wake-up runs the missed ticks (at most 0.1 s of them), so the motion
-  follows the wall clock. Buttons reach it through a queue (:mod:`.actions` does them), so
+- **control** (:mod:`.control_loop`): :meth:`Teleop.tick` at the controller's rate (1/dt),
+  sleeping to absolute deadlines; a late wake-up runs the missed ticks (at most 0.1 s of
+  them), so the motion follows the wall clock. Buttons reach it through a queue (:mod:`.actions` does them), so
   only this thread touches the Teleop and the robot's ``pin.Data``. A controlling page that
   is gone or silent for longer than the Teleop's timeout stops the robot (the dead man; a
   reversal too), one whose main thread is silent for :data:`FREEZE_LIMIT` too, and every
@@ -61,11 +61,13 @@ from ..viewer.server import check_host
 from .access import AccessPolicy
 from .actions import REPLAY_FPS as REPLAY_FPS
 from .actions import Actions, Recordings
+from .control_loop import MAX_CATCH_UP as MAX_CATCH_UP
+from .control_loop import ControlLoop
 from .handlers import HEADER_TIMEOUT as HEADER_TIMEOUT
 from .handlers import MAX_CONNECTIONS as MAX_CONNECTIONS
 from .handlers import STATIC as STATIC
 from .handlers import console_files, web_server
-from .pacing import BATCH_LIMIT, MIN_SLEEP, REALTIME_PRIORITY, YIELD_SHARE, LoopStats, request_realtime
+from .pacing import REALTIME_PRIORITY, LoopStats
 from .protocol import CLOCK_DRIFT as CLOCK_DRIFT
 from .protocol import FLOOD_LIMIT as FLOOD_LIMIT
 from .protocol import FREEZE_LIMIT as FREEZE_LIMIT
@@ -78,9 +80,6 @@ from .session import Teleop
 
 RENDER_RATE = 60.0
 """Frames per second sent to the pages at most."""
-
-MAX_CATCH_UP = 0.1
-"""Seconds of missed ticks a late control loop runs at once; beyond, the motion waits."""
 
 SWITCH_INTERVAL = 2e-4
 """Seconds a thread holding the GIL runs before a waiting one may take it, while a console
@@ -109,10 +108,10 @@ class TeleopServer:
     Attributes:
         url: the console's URL: a real address, the port and the token when there is one.
         access: the :class:`~.access.AccessPolicy` every request and handshake passes.
-        scheduling: what the control thread runs under, in words (once it started).
         pages: the pages connected (:class:`~.protocol.Pages`).
         actions: what the buttons do (:class:`~.actions.Actions`).
         recordings: the recorded runs saved (:class:`~.actions.Recordings`).
+        control_loop: the control thread's loop (:class:`~.control_loop.ControlLoop`).
     """
 
     def __init__(
@@ -144,16 +143,12 @@ class TeleopServer:
         ):
             raise InputError(f"realtime_priority must be None or an integer in [1, 99], got {realtime_priority!r}")
         self.realtime_priority = realtime_priority
-        self.scheduling = ""
-        self._scheduled = threading.Event()
         self.stats = LoopStats()
         self.files = console_files()
         """The console's own files (content type, bytes), read once: all it serves besides
         the recordings."""
-        self._applied_seq = 0  # the input_seq the last ticks applied (the frames say it)
         self._running = threading.Event()
         self._changed = threading.Event()
-        self._state_version = 0
         self._pose_lock = threading.Lock()
         self._pose_data = self.robot.model.createData()  # for callers of tip_pose, not the loop's
 
@@ -191,10 +186,19 @@ class TeleopServer:
             self.record_dir, robot=self.robot.name, viewer=self.viewer, token=self.access.token, say=self.pages.event
         )
         self.actions = Actions(teleop, self.pages, self.recordings)
+        self.control_loop = ControlLoop(
+            teleop,
+            self.pages,
+            self.actions,
+            self.stats,
+            realtime_priority=realtime_priority,
+            running=self._running,
+            changed=self._changed,
+        )
         self._web_ready = threading.Event()
         self._threads = [
             threading.Thread(target=self._serve, name="pinrate-teleop-web", daemon=True),
-            threading.Thread(target=self._control, name="pinrate-teleop-control", daemon=True),
+            threading.Thread(target=self.control_loop.run, name="pinrate-teleop-control", daemon=True),
             threading.Thread(target=self._render, name="pinrate-teleop-render", daemon=True),
         ]
         self._switch_interval = sys.getswitchinterval()
@@ -205,7 +209,7 @@ class TeleopServer:
         if not self._web_ready.wait(10.0):
             self.close()
             raise PinrateError("the teleop web server did not start within 10 s")
-        self._scheduled.wait(5.0)
+        self.control_loop.scheduled.wait(5.0)
 
     # ------------------------------------------------------------------ life
     def __enter__(self) -> TeleopServer:
@@ -218,6 +222,11 @@ class TeleopServer:
     def rate(self) -> float:
         """The control loop's rate (Hz): 1 / the controller's dt."""
         return 1.0 / self.teleop.controller.dt
+
+    @property
+    def scheduling(self) -> str:
+        """What the control thread runs under, in words (once it started)."""
+        return self.control_loop.scheduling
 
     def wait(self) -> None:
         """Block until :meth:`close` (or Ctrl-C in the calling thread)."""
@@ -328,75 +337,6 @@ class TeleopServer:
             jog_share=JOG_SHARE,
         )
 
-    # ------------------------------------------------------------------ control thread
-    def _control(self) -> None:
-        self.scheduling = request_realtime(self.realtime_priority)
-        self._scheduled.set()
-        teleop, pages = self.teleop, self.pages
-        period = teleop.controller.dt
-        started = time.monotonic()
-        deadline = started
-        last_wake = started
-        owed = 0.0
-        while self._running.is_set():
-            self.actions.run_pending()
-            if teleop.controller.dt != period:  # a new controller: keep its rate
-                period = teleop.controller.dt
-            now = time.monotonic()
-            self.stats.add(now - last_wake)
-            owed += now - last_wake
-            last_wake = now
-            ticks = int(owed / period + 1e-9)
-            limit = max(1, int(MAX_CATCH_UP / period))
-            if ticks > limit:
-                ticks, owed = limit, limit * period
-            applied_seq = pages.input_seq
-            before = teleop.q
-            before_status = None if teleop.last is None else teleop.last.status
-            done = 0
-            try:
-                for tick in range(ticks):  # each missed tick at its own time (the recording's times)
-                    teleop.tick(now - (ticks - 1 - tick) * period)
-                    done += 1
-                    # A long batch yields: a button pressed meanwhile (STOP) comes first.
-                    if time.monotonic() - now > BATCH_LIMIT or not pages.requests.empty():
-                        break
-            except Exception as error:  # a bug: the robot halts, the console goes on
-                self.actions.failed(error)
-                done = ticks
-            owed -= done * period
-            self._applied_seq = applied_seq
-            if ticks and (
-                not np.array_equal(teleop.q, before) or teleop.last is None or teleop.last.status is not before_status
-            ):
-                self._state_version += 1
-                self._changed.set()
-            silent = pages.controller is None or now - pages.last_heard > teleop.timeout
-            # The freeze rule is a controlling page's: a caller driving the Teleop from Python
-            # with no page connected is not frozen.
-            frozen = pages.controller is not None and now - pages.main_heard > pages.freeze_limit
-            if frozen and not teleop.reversing and teleop.dead_man_stop(pages.frozen):
-                self._changed.set()  # on this clock, not at the next heartbeat: a late one is no delay
-            if (silent or frozen) and teleop.reversing:
-                why = (
-                    "gone"
-                    if pages.controller is None
-                    else f"silent for {teleop.timeout:g} s"
-                    if silent
-                    else f"frozen: its main thread silent for {pages.freeze_limit:g} s"
-                )
-                teleop.dead_man_stop(f"reversal stopped: the controlling page is {why}")
-                pages.event(f"reversal stopped: the controlling page is {why}", "warning")
-                self._changed.set()
-            deadline += period
-            finished = time.monotonic()
-            delay = deadline - finished
-            # However late, a share of the time worked is slept: a real-time thread never
-            # takes a core whole (pacing's docstring).
-            time.sleep(max(delay, MIN_SLEEP, YIELD_SHARE * (finished - now)))
-            if delay < -MAX_CATCH_UP:
-                deadline = time.monotonic()  # far behind: start afresh rather than race
-
     # ------------------------------------------------------------------ render thread
     def _render(self) -> None:
         interval = 1.0 / self.render_rate
@@ -409,9 +349,9 @@ class TeleopServer:
             if not self._running.is_set():
                 return
             if self.pages.clients:
-                version = self._state_version
+                version = self.control_loop.state_version
                 poses = version != shown_version or started - last_stats > 1.0
-                frame = self.readout.frame(poses=poses, mode=self.pages.mode, input_seq=self._applied_seq)
+                frame = self.readout.frame(poses=poses, mode=self.pages.mode, input_seq=self.control_loop.applied_seq)
                 shown_version = version
                 last_stats = started
                 loop = self.pages.loop

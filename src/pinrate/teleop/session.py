@@ -19,10 +19,10 @@ the sensor is the tip, the default) or, with ``frame="base"``, in the world fram
 turned into the sensor's at each tick. The same speeds bound the commanded twist (the
 controller's saturation), so the hand never moves faster than them.
 
-The record of the way back holds only motion: each tick that moves the robot advances a
-motion clock by dt, idle ticks do not, so :meth:`Teleop.reverse` retraces the last
-``history`` seconds of motion, not of waiting. :meth:`Teleop.mark` starts a new segment (the
-reversal then stops there). A run recorded for saving (:meth:`Teleop.start_recording`) keeps
+The record of the way back (:mod:`.way_back`) holds only motion: each tick that moves the
+robot advances a motion clock by dt, idle ticks do not, so :meth:`Teleop.reverse` retraces
+the last ``history`` seconds of motion, not of waiting. :meth:`Teleop.mark` starts a new
+segment (the reversal then stops there). A run recorded for saving (:meth:`Teleop.start_recording`) keeps
 every tick with its wall time, rates and status (:class:`~.recording.Recording`).
 
 Only the motion calls (:meth:`~Teleop.command`, :meth:`~Teleop.reverse`, :meth:`~Teleop.stop`,
@@ -39,7 +39,6 @@ documents and changes nothing, and nothing else raises.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
@@ -49,11 +48,11 @@ import numpy as np
 from ..checks import check_positive
 from ..control.commands import JointJog
 from ..control.controller import Controller, Step
-from ..control.recorder import Playback, Recorder
 from ..errors import InputError, choices_hint
 from ..kinematics.manipulator import Robot, check_robot
 from .held import STILL, Held, check_time, deflection
 from .recording import Recording
+from .way_back import WayBack
 
 FRAMES = ("hand", "base")
 """The values of ``Teleop(frame=...)``: the sensor frame's axes or the world's."""
@@ -112,16 +111,13 @@ class Teleop:
         self._options = options
         self.controller = self._controller(options)
         self.q = robot.home() if q0 is None else robot.check_q(q0)
-        self.recorder = Recorder(history)
+        self._way_back = WayBack(history)
+        self.recorder = self._way_back.recorder
         """The motion kept for :meth:`reverse` (times on the motion clock, s)."""
         self.last: Step | None = None
         self.halted = False
         self.dead_man = ""
         self._command = STILL
-        self._clock = 0.0
-        self._playback: Playback | None = None
-        self._reversed_at = -math.inf
-        self._mark_due = False  # a mark() made during the reversal, applied when it ends
         self._recording: Recording | None = None
 
     # ------------------------------------------------------------------ configuration
@@ -154,8 +150,8 @@ class Teleop:
         options = {**self._options, **controller_options}
         controller = self._controller(options)
         self.controller, self._options = controller, options
-        if self._playback is not None:
-            self._playback.controller = controller
+        if self._way_back.playback is not None:
+            self._way_back.playback.controller = controller
 
     # ------------------------------------------------------------------ the operator
     def command(self, linear: object, angular: object, now: object = None, *, mode: str = "twist") -> None:
@@ -214,14 +210,14 @@ class Teleop:
         then ends where the robot is, and a :meth:`mark` made during the reversal applies."""
         self._command = STILL
         self.dead_man = ""
-        self._end_playback()
+        self._way_back.end(self.q)
 
     def dead_man_stop(self, reason: str) -> bool:
         """:meth:`stop` because the operator's input stopped (the console's page is gone,
         silent or frozen), and say so: :attr:`dead_man` becomes ``reason`` when something was
         stopped (a non-zero command held, fresh or expired, or a reversal). True then; False
         otherwise (the robot was still: what :attr:`dead_man` said stays)."""
-        stopped = self._command.moves or self._playback is not None
+        stopped = self._command.moves or self.reversing
         said = self.dead_man
         self.stop()
         self.dead_man = str(reason) if stopped else said
@@ -245,8 +241,7 @@ class Teleop:
         start = self.robot.home() if q is None else self.robot.check_q(q)
         self.stop()
         self.q = start
-        self.recorder.clear()
-        self._mark_due = False
+        self._way_back.clear()
         self.controller.reset()
         self.last = None
 
@@ -259,15 +254,12 @@ class Teleop:
         reversal ended: at the old segment's start when it ran to completion, where the robot
         was when a command or :meth:`stop` ended it.
         """
-        if self._playback is not None:
-            self._mark_due = True
-        else:
-            self.recorder.clear()
+        self._way_back.mark()
 
     @property
     def reversing(self) -> bool:
         """True while a reversal retraces the record."""
-        return self._playback is not None
+        return self._way_back.playback is not None
 
     def reverse(self, now: object = None) -> bool:
         """From the next tick on, retrace the recorded motion (the last ``history`` seconds
@@ -281,44 +273,18 @@ class Teleop:
         stamp = check_time(now)
         if self.halted:
             raise InputError("halted: resume first")
-        if self._playback is not None:
+        way_back = self._way_back
+        if way_back.playback is not None:
             self._command = STILL
-            self._reversed_at = stamp
+            way_back.reversed_at = stamp
             return True
         if len(self.recorder) < 2:
             return False
         self._command = STILL
-        self._playback = self.recorder.playback(self.controller)
-        self._reversed_at = stamp
+        way_back.playback = self.recorder.playback(self.controller)
+        way_back.reversed_at = stamp
         self.dead_man = ""
         return True
-
-    def _end_playback(self) -> None:
-        """Forget what the playback retraced, so the record ends where the robot is (the
-        record alone, once it has come all the way back); or, when a :meth:`mark` waited for
-        the end, forget the whole record: the new segment starts here.
-
-        The record is not changed while a playback runs (no operator step records, mark
-        waits, reset and configure end or keep the playback first), so its newest sample is
-        where the playback began and ``elapsed`` counts back from it.
-        """
-        playback = self._playback
-        if playback is None:
-            return
-        self._playback = None
-        if self._mark_due:
-            self._mark_due = False
-            self.recorder.clear()
-            return
-        if not len(self.recorder):
-            return
-        times = self.recorder.times
-        oldest, newest = float(times[0]), float(times[-1])
-        completed = playback.done and not playback.stopped  # then newest - elapsed may round past oldest
-        reached = oldest if completed else max(oldest, newest - playback.elapsed)
-        self.recorder.truncate(reached)
-        self._clock = reached
-        self.recorder.record(reached, self.q)
 
     # ------------------------------------------------------------------ the loop
     def current_command(self, now: object = None) -> tuple[np.ndarray, np.ndarray]:
@@ -349,16 +315,15 @@ class Teleop:
         stamp = check_time(now)
         held = self._live(stamp)
         commanded = held.moves
-        expired = not (commanded or self.halted or self.dead_man) and self._playback is None
+        way_back = self._way_back
+        expired = not (commanded or self.halted or self.dead_man) and way_back.playback is None
         if expired and self._command.moves:
             self.dead_man = f"no input for {self.timeout:g} s"  # a non-zero command expired: the dead man
-        if self._playback is not None and commanded and held.stamp > self._reversed_at:
-            self._end_playback()
-        if self._playback is not None:
-            step = self._playback.step(self.q)
+        if way_back.playback is not None and commanded and held.stamp > way_back.reversed_at:
+            way_back.end(self.q)
+        if way_back.playback is not None:
+            step = way_back.step(self.q)
             self.q = step.q
-            if self._playback.done:
-                self._end_playback()
         else:
             step = self._operator_step(held)
         self.last = step
@@ -373,10 +338,7 @@ class Teleop:
         command = held.command(controller, observation, self._frame, self.max_linear_speed)
         step = controller.step(self.q, command, observation=observation)
         if step.joint_rates.any():
-            if not len(self.recorder):
-                self.recorder.record(self._clock, self.q)
-            self._clock += controller.dt
-            self.recorder.record(self._clock, step.q)
+            self._way_back.record(self.q, step.q, controller.dt)
         self.q = step.q
         return step
 
