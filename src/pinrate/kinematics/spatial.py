@@ -56,7 +56,7 @@ def saturate_twist(
     """The twist (linear rows ``twist[:m]`` in m/s, then angular in rad/s, any one frame's
     axes) scaled by ONE factor, the largest that meets both speed limits (contract v2.1):
 
-        s = min(1, max_linear_speed / |v|, max_angular_speed / |ω|),    twist <- s twist,
+        s = min(1, max_linear_speed / ‖v‖, max_angular_speed / ‖ω‖),    twist <- s twist,
 
     so the commanded screw keeps its direction (scaling the two parts apart would bend it);
     and whether it was scaled. The compiled core computes s with the same operations."""
