@@ -173,7 +173,7 @@ class Servo {
       displacement = rates * s_.dt;
       pinocchio::integrate(kin_.model, q, displacement, next);
       int hit = -1;
-      if (s_.position_limits) hit = clamp(next);
+      if (s_.position_limits) hit = clamp(next, q, rates);
       if (hit >= 0) flags |= CLAMPED;
       log.flags[step] = flags;
       log.scale[step] = scale;
@@ -346,8 +346,9 @@ class Servo {
   // Controller._passing: some joint's commanded rate carries it past a limit within dt.
   bool passing(const Vector &q, const Vector &rates) const {
     for (const Limit &limit : s_.limits) {
-      const double value = q[limit.q_index] + rates[limit.v_index] * s_.dt;
-      if (value > limit.upper || value < limit.lower) return true;
+      const double rate = rates[limit.v_index];
+      const double value = q[limit.q_index] + rate * s_.dt;
+      if ((value > limit.upper && rate > 0.0) || (value < limit.lower && rate < 0.0)) return true;
     }
     return false;
   }
@@ -362,14 +363,18 @@ class Servo {
     return scale;
   }
 
-  // Controller._clamp: q clamped to the limits; the first limit it was past, or -1.
-  int clamp(Vector &q) const {
+  // PositionLimits.clamp: next clamped to the limits, a clamped joint's rate set to the one
+  // that reaches its bound from q in dt (the rates logged are the rates applied); the first
+  // limit it was past, or -1.
+  int clamp(Vector &next, const Vector &q, Vector &rates) const {
     int hit = -1;
     for (std::size_t i = 0; i < s_.limits.size(); ++i) {
       const Limit &limit = s_.limits[i];
-      const double value = q[limit.q_index];
+      const double value = next[limit.q_index];
       if (value < limit.lower || value > limit.upper) {
-        q[limit.q_index] = value < limit.lower ? limit.lower : limit.upper;
+        const double bound = value < limit.lower ? limit.lower : limit.upper;
+        next[limit.q_index] = bound;
+        rates[limit.v_index] = (bound - q[limit.q_index]) / s_.dt;
         if (hit < 0) hit = static_cast<int>(i);
       }
     }

@@ -189,3 +189,108 @@ def test_a_scale_just_under_one_never_reads_as_one() -> None:
     assert "scaled by 0.9996 " in scaled_detail(0.9996)
     assert "scaled by 0.999999999 " in scaled_detail(1 - 1e-9)
     assert float(scaled_detail(np.nextafter(1.0, 0.0)).split()[3]) < 1.0
+
+
+def test_a_start_outside_the_limits_is_refused_naming_the_joint() -> None:
+    """Issue 23: panda's neutral pose puts joint4 at 0 (limits [-3.07, -0.07]); a step from it
+    used to snap the joint onto its limit (6.98 rad/s realised against 2.175)."""
+    panda = pinrate.load("panda")
+    outside = panda.neutral()
+    with pytest.raises(InputError, match=r"panda_joint4 at 0 \(limits \[-3\.0718"):
+        Controller(panda).step(outside, np.zeros(6))
+    with pytest.raises(InputError, match="panda_joint4"):
+        pinrate.servo(panda, outside, panda.pose(panda.home()))
+    with pytest.raises(InputError, match="panda_joint4"):
+        pinrate.Teleop(panda, outside)
+    # Without position limits nothing is refused, and nothing is snapped back either.
+    free = Controller(panda, position_limits=False, acceleration_limits=5.0)
+    step = free.step(outside, np.array([0.05, 0, 0, 0, 0, 0]))
+    realised = (step.q - outside) / free.dt  # every panda joint is 1-DOF: q moves by rate dt
+    np.testing.assert_allclose(realised, step.joint_rates, rtol=1e-9, atol=1e-12)
+
+
+def side_branch_arm(tmp_path: Path) -> pinrate.Robot:
+    """Issue 23's repro: a 2R planar arm and a limited side joint on the base ([0.5, 1.0]),
+    which the neutral pose (0) puts outside its limits."""
+    axis = '<axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="2"/>'
+    urdf = (
+        '<robot name="side"><link name="base"/><link name="upper"/><link name="fore"/><link name="hand"/>'
+        '<link name="side"/>'
+        f'<joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>{axis}</joint>'
+        f'<joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/>'
+        f'<origin xyz="0.5 0 0"/>{axis}</joint>'
+        '<joint name="wrist" type="fixed"><parent link="fore"/><child link="hand"/><origin xyz="0.4 0 0"/></joint>'
+        '<joint name="side_joint" type="revolute"><parent link="base"/><child link="side"/><axis xyz="1 0 0"/>'
+        '<limit lower="0.5" upper="1.0" effort="1" velocity="1"/></joint></robot>'
+    )
+    path = tmp_path / "side.urdf"
+    path.write_text(urdf, encoding="utf-8")
+    return pinrate.load(path, tip="hand")
+
+
+@pytest.mark.parametrize("singularity", ["decelerate", "generalized_inverse", "freeze", "adaptive_dls"])
+def test_a_side_joint_outside_its_limits_never_raises_a_raw_error(tmp_path: Path, singularity: str) -> None:
+    """Issue 23: a KeyError came out of the planned solve when a limited joint outside the
+    partition sat outside its limits in the singular region (the stretched arm)."""
+    robot = side_branch_arm(tmp_path)
+    partition = pinrate.Partition(["shoulder", "elbow"], [], linear="xy", angular="")
+    stretched = robot.neutral()  # elbow 0: A is singular; side_joint at 0, below its 0.5
+    with pytest.raises(InputError, match="side_joint"):
+        Controller(robot, partition=partition, singularity=singularity).step(stretched, np.array([0.1, 0.05]))
+    for options in ({}, {"acceleration_limits": 3.0}):
+        free = Controller(robot, partition=partition, singularity=singularity, position_limits=False, **options)
+        q = stretched
+        for twist in ([0.1, 0.05], [-0.2, 0.1], [0.0, -0.3]):
+            step = free.step(q, np.array(twist))
+            assert np.isfinite(step.q).all() and step.q[robot.joint_names.index("side_joint")] == 0.0
+            q = step.q
+
+
+def test_the_acceleration_blend_says_when_it_stops_a_joint_on_its_limit() -> None:
+    """Issue 23: the blend stopped a joint on its limit and said only RATE_LIMITED. Here
+    wrist_3 runs at 0.5 rad/s toward its upper limit, 0.5 mrad away, and is commanded back:
+    a = 25 rad/s² lets the rate fall only to 0.25 rad/s this step, which would carry it 2 mrad
+    past the limit, so it stops on it (0.05 rad/s)."""
+    robot = pinrate.load("ur5")
+    controller = Controller(robot, acceleration_limits=25.0, velocity_limits=np.inf)
+    _, upper = robot.joint_limits("wrist_3_joint")
+    q = robot.home()
+    q[5] = upper - 0.008
+    for _ in range(2):  # 0.25 then 0.5 rad/s: 2.5 + 5 mrad
+        q = controller.step(q, pinrate.JointJog({"wrist_3_joint": 0.5})).q
+    assert q[5] == pytest.approx(upper - 0.0005, abs=1e-12)
+    step = controller.step(q, pinrate.JointJog({"wrist_3_joint": -0.5}))
+    assert step.q[5] == upper and step.joint_rates[5] == pytest.approx(0.05, abs=1e-9)
+    assert Status.JOINT_LIMIT in step.conditions and Status.RATE_LIMITED in step.conditions
+    assert step.status is Status.JOINT_LIMIT and "wrist_3_joint" in step.frozen
+    assert "acceleration limits" in step.detail
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "scara", "spherical_6dof", "al5d"])
+def test_the_rates_said_are_the_rates_applied_and_within_every_limit(name: str) -> None:
+    """Random twists and jogs, with velocity and acceleration limits, from inside the limits:
+    q stays within them, every 1-DOF joint moves by exactly its reported rate × dt (to the
+    rounding of q + v dt), and no rate exceeds its velocity limit."""
+    robot = robot_named(name) if name != "spherical_6dof" else pinrate.robots.spherical_6dof()
+    rng = np.random.default_rng(23)
+    speed = 0.7
+    for options in ({}, {"acceleration_limits": 4.0}):
+        controller = Controller(robot, velocity_limits=speed, singularity="generalized_inverse", **options)
+        bounds = limited(robot, controller)
+        q = robot.home()
+        size = controller.index.rows.size
+        for step_number in range(400):
+            if step_number % 40 == 0:
+                command: object = rng.normal(size=size) * 0.5
+                if rng.random() < 0.3:
+                    command = pinrate.JointJog({str(rng.choice(controller.partition.joints)): float(rng.normal())})
+            step = controller.step(q, command)
+            for index, lower, upper in bounds:
+                assert lower <= step.q[index] <= upper
+            moved = (step.q - q) / controller.dt
+            for joint in robot.model.joints[1:]:
+                if joint.nq == 1:
+                    rounding = 4 * np.finfo(float).eps * max(1.0, abs(q[joint.idx_q])) / controller.dt
+                    assert abs(moved[joint.idx_q] - step.joint_rates[joint.idx_v]) <= rounding, (name, step.detail)
+            assert np.abs(step.joint_rates).max() <= speed * (1 + 1e-12)
+            q = step.q

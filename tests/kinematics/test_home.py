@@ -11,7 +11,7 @@ import pytest
 import pinrate
 from pinrate.kinematics.home import WELL_CONDITIONED
 from pinrate.robots import example_robot_data_share
-from support import partition_rows_and_columns
+from support import fuzz_count, partition_rows_and_columns, random_urdf
 
 SHARE = example_robot_data_share()
 FILES = [
@@ -91,3 +91,22 @@ def test_an_srdf_beside_the_urdf_gives_the_home(tmp_path: Path, states: dict, ch
     assert robot.home_choice.startswith(chosen)
     if elbow is not None:
         np.testing.assert_allclose(robot.home(), [0.3, elbow])
+
+
+@pytest.mark.parametrize("seed", range(fuzz_count(40)))
+def test_home_is_inside_every_joint_s_limits(tmp_path: Path, seed: int) -> None:
+    """Issue 23/24: random trees whose limits exclude 0 (a joint's neutral value) got neutral
+    as home, outside the limits, where no controller step may start."""
+    rng = np.random.default_rng(seed)
+    path = tmp_path / "random.urdf"
+    path.write_text(random_urdf(rng), encoding="utf-8")
+    try:
+        robot = pinrate.load(path)
+    except pinrate.PinrateError:
+        return  # no arm in this tree
+    home = robot.home()
+    for joint in robot.joint_names:
+        limits = robot.joint_limits(joint)
+        if limits is not None:
+            value = home[robot.model.joints[robot.joint_id(joint)].idx_q]
+            assert limits[0] <= value <= limits[1], (joint, value, limits, robot.home_choice)

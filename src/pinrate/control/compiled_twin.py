@@ -87,6 +87,12 @@ def reason(controller: Any, options: tuple[str, ...]) -> str | None:
     for covered, reason in COMPILED_COVERAGE.values():
         if covered is not None and not covered(controller):
             return reason
+    if controller.context.ranks["J"] < controller.index.rows.size:
+        return (
+            "the partition's joints cannot make every twist (generic rank "
+            f"{controller.context.ranks['J']} for {controller.index.rows.size} components): each step's "
+            "residual is judged on the Python path (Status.UNACHIEVABLE_TWIST)"
+        )
     return None
 
 

@@ -53,6 +53,7 @@ from .limits import AccelerationLimits, PositionLimits, VelocityLimits, per_join
 from .observation import Observation, Step, error_norms
 from .options import MAX_ANGULAR_SPEED, MAX_LINEAR_SPEED, option_names
 from .posture import PostureTask
+from .reach import out_of_reach
 from .robot_facts import Limit, robot_facts
 from .singular_region import Conditioning, check_strategy, check_thresholds, measured_blocks
 from .singularity import RULES, SINGULAR_THRESHOLD, SLOW_THRESHOLD, STRATEGIES, WRIST_STRATEGIES, plan_step
@@ -247,6 +248,12 @@ class Controller:
             return f"{type(self).__name__} steps its own way: its loops run on the Python path"
         return compiled_twin.reason(self, option_names(type(self)))
 
+    def check_inside_limits(self, q: np.ndarray) -> None:
+        """InputError naming every joint ``q`` (nq,) puts outside its position limits, when the
+        controller keeps them (:meth:`step` refuses such a q: it would have to snap the joint
+        onto its limit, or leave it outside)."""
+        self._positions.check_inside(q)
+
     def position_limit(self, number: int) -> Limit:
         """The ``number``-th position limit the controller keeps (the compiled core names a
         clamped joint by it)."""
@@ -323,6 +330,7 @@ class Controller:
         """
         if observation is None:
             observation = self.observe(q)
+        self.check_inside_limits(observation.q)
         if isinstance(command, (JointJog, Uncoupled)):
             return self._joint_space.step(observation, command)
         if not isinstance(command, PoseGoal):
@@ -330,6 +338,10 @@ class Controller:
         twist, saturated = self.command_twist(observation, command)
         statuses = [Status.TWIST_SATURATED] if saturated else []
         details: list[str] = []
+        unreachable = out_of_reach(self.context, observation, twist)
+        if unreachable:
+            statuses.append(Status.UNACHIEVABLE_TWIST)
+            details.append(unreachable)
         bound = self.context.conditioning_bound(observation)
         auxiliary = self.auxiliary.plan(observation, twist) if self.auxiliary is not None else None
         plan = (

@@ -59,7 +59,8 @@ class Finish:
         self-collision, integration over dt, the clamp to the position limits, the status."""
         rates = self.rate_limits.apply(rates, statuses, details)
         if self.accelerations is not None:
-            rates = self.accelerations.apply(observation.q, rates, frozen, statuses, details)
+            rates, stopped = self.accelerations.apply(observation.q, rates, frozen, statuses, details)
+            frozen = frozen + tuple(name for name in stopped if name not in frozen)
         if self.collision is not None:
             verdict = self.collision.limit(observation.q, rates, self.dt)
             if verdict.status is Status.HALT_FOR_COLLISION:
@@ -68,16 +69,16 @@ class Finish:
                 rates = rates * verdict.scale
                 statuses.append(verdict.status)
                 details.append(verdict.detail)
-        if self.accelerations is not None:
-            self.accelerations.remember(rates)  # the rates applied, after every scaling
         next_q = self.robot.integrate(observation.q, rates, self.dt)
         if self.auxiliary is not None:
             self.auxiliary.reach_extension(observation.q, next_q)
         if self.positions.enabled:
-            hit = self.positions.clamp(next_q)
+            hit = self.positions.clamp(next_q, observation.q, rates)
             if hit and Status.JOINT_LIMIT not in statuses:
                 statuses.append(Status.JOINT_LIMIT)
                 details.append(hit)
+        if self.accelerations is not None:
+            self.accelerations.remember(rates)  # the rates applied, after every scaling and the clamp
         conditions = ranked(statuses)
         status = conditions[-1] if conditions else Status.OK
         return Step(next_q, rates, status, frozen, twist, observation, "; ".join(details), conditions)

@@ -27,8 +27,14 @@ class Limit(NamedTuple):  # a tuple: the per-step test reads it on Python floats
     upper: float
 
     def onto_the_limit(self, q: np.ndarray, rate: float, dt: float) -> float:
-        """The rate, cut so that the joint ends the step on its limit at most."""
+        """The rate, cut so that the joint ends the step on its limit at most; a joint already
+        past a limit (a controller without position limits) is never driven further out, nor
+        snapped back: its outward rate is cut to 0."""
         value = q[self.q_index]
+        if value > self.upper:
+            return min(rate, 0.0)
+        if value < self.lower:
+            return max(rate, 0.0)
         return min(max(rate, (self.lower - value) / dt), (self.upper - value) / dt)
 
 

@@ -154,6 +154,7 @@ def servo(
     elif controller.robot is not robot:
         raise InputError("the controller was built for another Robot object: servo it on that one")
     q = robot.check_q(q0)
+    controller.check_inside_limits(q)
     goal = PoseGoal.of(target, gain)
     tol = check_positive(tol, "tol")
     if tol < MIN_TOL:

@@ -137,17 +137,25 @@ def srdf_states(path: Path) -> list[str]:
 def find_home(
     robot: Robot, partition: Partition, named: Sequence[tuple[str, np.ndarray]] = ()
 ) -> tuple[np.ndarray, str]:
-    """(q, why): the first of ``named`` (label, q) that is well-conditioned, else neutral if it
-    is comfortable and clear of the limits, else the most comfortable of SEARCH_DRAWS seeded
-    draws at the smallest distance from neutral (SEARCH_FRACTIONS) where one is comfortable,
-    else the best well-conditioned draw of all, else neutral."""
+    """(q, why), q inside every joint's position limits: the first of ``named`` (label, q)
+    that is within the limits and well-conditioned, else neutral (each joint it puts outside
+    its limits moved onto the nearest one) if it is comfortable and clear of the limits, else
+    the most comfortable of SEARCH_DRAWS seeded draws at the smallest distance from neutral
+    (SEARCH_FRACTIONS) where one is comfortable, else the best well-conditioned draw of all,
+    else that neutral."""
     ranks = generic_ranks(robot, partition)
     for label, q in named:
-        if home_quality(robot, partition, q, ranks).well_conditioned:
+        if not _outside_limits(robot, q) and home_quality(robot, partition, q, ranks).well_conditioned:
             return q.copy(), label
     neutral = robot.neutral()
+    moved = _outside_limits(robot, neutral)
+    for joint in moved:  # onto its nearest limit: a home is inside every joint's limits
+        low, high = robot.joint_range(joint)
+        index = robot.model.joints[robot.joint_id(joint)].idx_q  # a 1-DOF joint: one coordinate
+        neutral[index] = min(max(neutral[index], low), high)
+    label = f"neutral, with {', '.join(moved)} moved onto the nearest limit" if moved else "neutral"
     if home_quality(robot, partition, neutral, ranks).comfortable and not _near_a_limit(robot, partition, neutral):
-        return neutral, "neutral (well-conditioned)"
+        return neutral, f"{label} (well-conditioned)"
     generator = np.random.default_rng(0)
     joints = [joint for joint in partition.joints if robot.model.joints[robot.joint_id(joint)].nv == 1]
     best: tuple[HomeQuality, np.ndarray, float] | None = None
@@ -171,7 +179,7 @@ def find_home(
             best = (qualities[leader], draws[leader], fraction)
     if best is not None and best[0].well_conditioned:
         return best[1], _searched(best[0], best[2], "no comfortable one found; the best well-conditioned")
-    return neutral, "neutral (singular; no well-conditioned configuration found near it)"
+    return neutral, f"{label} (singular; no well-conditioned configuration found near it)"
 
 
 def _searched(quality: HomeQuality, fraction: float, which: str) -> str:
@@ -180,6 +188,16 @@ def _searched(quality: HomeQuality, fraction: float, which: str) -> str:
         f"joint's half range): smallest singular value {quality.smallest_singular_value:.3g}, "
         f"inverse condition number {quality.inverse_condition:.2f}"
     )
+
+
+def _outside_limits(robot: Robot, q: np.ndarray) -> list[str]:
+    """The joints ``q`` puts outside their position limits."""
+    outside = []
+    for joint in robot.joint_names:
+        limits = robot.joint_limits(joint)
+        if limits is not None and not limits[0] <= q[robot.model.joints[robot.joint_id(joint)].idx_q] <= limits[1]:
+            outside.append(joint)
+    return outside
 
 
 def _near_a_limit(robot: Robot, partition: Partition, q: np.ndarray) -> bool:

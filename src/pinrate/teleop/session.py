@@ -111,6 +111,7 @@ class Teleop:
         self._options = options
         self.controller = self._controller(options)
         self.q = robot.home() if q0 is None else robot.check_q(q0)
+        self.controller.check_inside_limits(self.q)
         self._way_back = WayBack(history)
         self.recorder = self._way_back.recorder
         """The motion kept for :meth:`reverse` (times on the motion clock, s)."""
@@ -236,9 +237,10 @@ class Teleop:
     def reset(self, q: object = None) -> None:
         """Back to ``q`` (default ``robot.home()``) at once: command, record and reversal
         cleared, the controller's memory too (:meth:`Controller.reset`); a new segment starts
-        at ``q``. The halt and a recording in progress are kept. InputError for a bad ``q``
-        (nothing changes then)."""
+        at ``q``. The halt and a recording in progress are kept. InputError for a bad ``q``,
+        one outside the position limits the controller keeps among them (nothing changes then)."""
         start = self.robot.home() if q is None else self.robot.check_q(q)
+        self.controller.check_inside_limits(start)
         self.stop()
         self.q = start
         self._way_back.clear()

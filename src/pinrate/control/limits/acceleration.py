@@ -40,10 +40,11 @@ class AccelerationLimits:
 
     def apply(
         self, q: np.ndarray, rates: np.ndarray, held: tuple[str, ...], statuses: list[Status], details: list[str]
-    ) -> np.ndarray:
-        """previous + s (rates - previous) on the joints not ``held`` (at a limit, frozen), s the
-        largest factor <= 1 keeping every change within a·dt; the held joints keep their rates,
-        and a joint the blend would carry past a limit stops on it. Between two rate vectors
+    ) -> tuple[np.ndarray, tuple[str, ...]]:
+        """(rates, stopped): previous + s (rates - previous) on the joints not ``held`` (at a
+        limit, frozen), s the largest factor <= 1 keeping every change within a·dt; the held
+        joints keep their rates, and a joint the blend would carry past a limit stops on it
+        (``stopped`` names those, said as ``Status.JOINT_LIMIT``). Between two rate vectors
         within the velocity limits, the result is within them too."""
         change = rates - self.previous
         for name in held:
@@ -51,15 +52,20 @@ class AccelerationLimits:
         largest = np.abs(change) / (self.limits * self.dt)
         worst = float(largest.max(initial=0.0))
         if worst <= 1.0:
-            return rates
+            return rates, ()
         blended = self.previous + change / worst
         for name in held:
             blended[self.velocity_of[name]] = rates[self.velocity_of[name]]
-        for limit in self.positions.passing(q, blended, ()):
-            blended[limit.velocity] = limit.onto_the_limit(q, blended[limit.velocity], self.dt)
         statuses.append(Status.RATE_LIMITED)
         details.append(f"rates changed by {1.0 / worst:.3g} of the step's change to meet the acceleration limits")
-        return blended
+        passing = self.positions.passing(q, blended, ())
+        for limit in passing:
+            blended[limit.velocity] = limit.onto_the_limit(q, blended[limit.velocity], self.dt)
+        stopped = tuple(limit.joint for limit in passing)
+        if stopped:
+            statuses.append(Status.JOINT_LIMIT)
+            details.append(f"stopped on a position limit by the acceleration limits: {', '.join(stopped)}")
+        return blended, stopped
 
 
 __all__ = ["AccelerationLimits"]

@@ -12,7 +12,7 @@ from collections.abc import Callable, Collection
 
 import numpy as np
 
-from ...errors import SingularBlockError
+from ...errors import InputError, SingularBlockError
 from ..observation import Observation
 from ..robot_facts import Limit
 from ..status import Status
@@ -47,10 +47,31 @@ class PositionLimits:
         q_values, rate_values, dt = q.tolist(), rates.tolist(), self.dt
         passing = []
         for limit in self.limits:
-            value = q_values[limit.q_index] + rate_values[limit.velocity] * dt
-            if (value > limit.upper or value < limit.lower) and limit not in skipped:
+            rate = rate_values[limit.velocity]
+            value = q_values[limit.q_index] + rate * dt
+            # Moving outward past a bound: a joint already outside (a controller without
+            # position limits) and standing still passes nothing.
+            if ((value > limit.upper and rate > 0.0) or (value < limit.lower and rate < 0.0)) and limit not in skipped:
                 passing.append(limit)
         return passing
+
+    def check_inside(self, q: np.ndarray) -> None:
+        """InputError naming every joint that ``q`` puts outside its limits, when the limits
+        are kept: a step from there would have to snap the joint onto its limit (a jump no
+        velocity limit allows) or leave q outside them. Nothing when they are not kept."""
+        if not self.enabled:
+            return
+        q_values = q.tolist()
+        outside = [
+            f"{limit.joint} at {q_values[limit.q_index]:.6g} (limits [{limit.lower:.6g}, {limit.upper:.6g}])"
+            for limit in self.limits
+            if not limit.lower <= q_values[limit.q_index] <= limit.upper
+        ]
+        if outside:
+            raise InputError(
+                f"q is outside the position limits: {'; '.join(outside)}. Start inside them (robot.home() is), "
+                "or bring the joint back with a controller built with position_limits=False"
+            )
 
     def hold(
         self,
@@ -97,14 +118,20 @@ class PositionLimits:
             rates[limit.velocity] = limit.onto_the_limit(q, commanded, self.dt)
         return rates, tuple(limit.joint for limit in blocked)
 
-    def clamp(self, q: np.ndarray) -> str:
-        """Clamp q in place to the limits; describe the first joint that was past one ('' if none)."""
+    def clamp(self, next_q: np.ndarray, q: np.ndarray, rates: np.ndarray) -> str:
+        """Clamp ``next_q`` in place to the limits, and each clamped joint's entry of ``rates``
+        (in place) to the rate that reaches its limit from ``q`` in dt, (bound - q) / dt, so the
+        rates said are the rates applied (the clamp only takes up rounding after the hold, which
+        already brings a joint onto its limit at most); describe the first joint that was past
+        one ('' if none). The compiled core clamps with the same operations."""
         hit = ""
         for limit in self.limits:
-            value = q[limit.q_index]
+            value = next_q[limit.q_index]
             if value < limit.lower or value > limit.upper:
-                q[limit.q_index] = limit.lower if value < limit.lower else limit.upper
-                hit = hit or reached_detail(limit, q[limit.q_index])
+                bound = limit.lower if value < limit.lower else limit.upper
+                next_q[limit.q_index] = bound
+                rates[limit.velocity] = (bound - q[limit.q_index]) / self.dt
+                hit = hit or reached_detail(limit, bound)
         return hit
 
 
