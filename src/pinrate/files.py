@@ -31,6 +31,7 @@ The caps on what a file may make pinrate allocate:
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import io
 import math
@@ -148,7 +149,7 @@ def replace_file(
         raise InputError(f"{_where(target, what)} exists and is not a regular file")
     temporary, descriptor = _create_beside(final, target, what)
     try:
-        if existing is not None:
+        if existing is not None and hasattr(os, "fchmod"):
             os.fchmod(descriptor, stat.S_IMODE(existing.st_mode))
         mode = "w" if encoding else "wb"
         with os.fdopen(descriptor, mode, encoding=encoding) as stream:
@@ -165,7 +166,8 @@ def replace_file(
             os.unlink(temporary)
         if isinstance(error, OSError):
             reason = error.strerror or str(error) or type(error).__name__
-            raise InputError(f"{_where(target, what)} could not be written ({reason}); it is as it was") from error
+            kept = "the file it was replacing is as it was" if existing is not None else "nothing was written"
+            raise InputError(f"{_where(target, what)} could not be written ({reason}); {kept}") from error
         raise
     _sync_folder(final.parent)
     return target
@@ -379,7 +381,7 @@ class Npz:
         bad = ~(np.abs(values) <= bound)
         if bad.any():
             entry = _first(bad)
-            raise self.refuse(f"holds {values[entry]!r} at {entry}: not a finite number within ±{bound:g}", name)
+            raise self.refuse(f"holds {float(values[entry])!r} at {entry}: not a finite number within ±{bound:g}", name)
 
     def number(self, name: str) -> float:
         """Field ``name``: one number (a 0-d array), as a float (finite or not: the caller judges)."""
@@ -546,7 +548,9 @@ def _header(stream: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype, int]:
         raise ValueError(f".npy format version {version[0]}.{version[1]}, not 1.0 or 2.0")
     if length > MAX_HEADER_BYTES:
         raise ValueError(f"a header of {length:,} bytes, over {MAX_HEADER_BYTES:,}")
-    text = io.BytesIO(length_bytes + _read_exactly(stream, length))
+    header = _read_exactly(stream, length)
+    ast.literal_eval(header.decode("latin1"))  # a SyntaxError: numpy would filter it as Python 2's, and warn
+    text = io.BytesIO(length_bytes + header)
     reader = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
     shape, fortran_order, dtype = reader(text, max_header_size=MAX_HEADER_BYTES)
     return tuple(shape), bool(fortran_order), np.dtype(dtype), 8 + len(length_bytes) + length

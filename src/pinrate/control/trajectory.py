@@ -188,7 +188,7 @@ class Trajectory:
             try:
                 partition = Partition(arm, wrist, linear=texts["linear"], angular=texts["angular"])
             except PinrateError as error:
-                raise npz.refuse(f"does not make a partition: {error}", "arm, wrist, linear, angular") from None
+                raise npz.refuse(f"holds no partition in 'arm', 'wrist', 'linear', 'angular': {error}") from None
         return cls(
             status=status,
             converged=converged,
