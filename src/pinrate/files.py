@@ -36,6 +36,7 @@ import contextlib
 import io
 import math
 import os
+import re
 import secrets
 import stat
 import struct
@@ -531,6 +532,10 @@ def _member(archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str, where: s
     return member
 
 
+_HEADER_TEXT = re.compile(rb"[\x20-\x5b\x5d-\x7e\n]*")
+"""What an .npy header of a plain dtype holds: printable ASCII (no backslash) and newlines."""
+
+
 def _header(stream: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype, int]:
     """The shape, order and dtype of an .npy stream and its header's length in bytes, from
     a header of at most :data:`MAX_HEADER_BYTES` (read whole only after its length is known)."""
@@ -549,7 +554,9 @@ def _header(stream: IO[bytes]) -> tuple[tuple[int, ...], bool, np.dtype, int]:
     if length > MAX_HEADER_BYTES:
         raise ValueError(f"a header of {length:,} bytes, over {MAX_HEADER_BYTES:,}")
     header = _read_exactly(stream, length)
-    ast.literal_eval(header.decode("latin1"))  # a SyntaxError: numpy would filter it as Python 2's, and warn
+    if not _HEADER_TEXT.fullmatch(header):  # what parsing it would warn of (an escape)
+        raise ValueError("a header that is not printable ASCII without backslashes")
+    ast.literal_eval(header.decode("ascii"))  # a SyntaxError: numpy would filter it as Python 2's, and warn
     text = io.BytesIO(length_bytes + header)
     reader = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
     shape, fortran_order, dtype = reader(text, max_header_size=MAX_HEADER_BYTES)
