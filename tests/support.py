@@ -2,8 +2,18 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import re
+import struct
+import subprocess
+import sys
+import textwrap
+import threading
 import time
+import zipfile
+import zlib
 from collections.abc import Callable
 from pathlib import Path
 
@@ -40,8 +50,6 @@ def finite_difference_jacobian(robot: pinrate.Robot, q: np.ndarray, step: float 
 def fuzz_count(base: int) -> int:
     """How many cases a fuzz test runs: ``base`` in ``make test`` (seeded, bounded), times
     ``PINRATE_FUZZ_SCALE`` for a longer hunt (``PINRATE_FUZZ_SCALE=100 pytest tests/fuzz``)."""
-    import os
-
     return base * max(1, int(os.environ.get("PINRATE_FUZZ_SCALE", "1")))
 
 
@@ -162,3 +170,268 @@ def random_urdf(rng: np.random.Generator) -> str:
             f'<child link="link{child}"/>{inner}</joint>'
         )
     return '<robot name="random">' + "".join(links) + "".join(joints) + "</robot>"
+
+
+# Corrupted files: what the loaders of saved files (pinrate.files) must refuse with an
+# InputError naming the file, never another exception, a hang or a huge allocation.
+
+
+STRUCTURES = (b"PK\x01\x02", b"PK\x03\x04", b"PK\x05\x06", b"\x93NUMPY")
+"""Where a zip's headers and an .npy header start: half the damage of :func:`corrupt_bytes`
+falls in the 64 bytes after one of them."""
+
+
+def corrupt_bytes(data: bytes, rng: np.random.Generator) -> tuple[str, bytes]:
+    """``data`` damaged one way, at random: truncated, bits flipped, a run of bytes
+    overwritten (with bytes, digits or punctuation: an .npy header is text) or zeroed, a
+    stretch repeated or cut out; half the time in a zip or .npy header (:data:`STRUCTURES`).
+    With a label for the message."""
+    kind = str(rng.choice(["truncate", "flip", "overwrite", "text", "zero", "repeat", "cut"]))
+    size = len(data)
+    starts = [match.start() for marker in STRUCTURES for match in re.finditer(re.escape(marker), data)]
+    if starts and rng.random() < 0.5:
+        at = min(size - 1, int(rng.choice(starts)) + int(rng.integers(0, 64)))
+    else:
+        at = int(rng.integers(0, size))
+    length = int(rng.integers(1, min(8 if rng.random() < 0.7 else 64, size - at) + 1))
+    damaged = bytearray(data)
+    if kind == "truncate":
+        return f"truncated at {at}", data[:at]
+    if kind == "flip":
+        for _ in range(int(rng.integers(1, 4))):
+            spot = min(size - 1, at + int(rng.integers(0, length)))
+            damaged[spot] ^= 1 << int(rng.integers(0, 8))
+        return f"bits flipped from {at}", bytes(damaged)
+    if kind == "overwrite":
+        damaged[at : at + length] = rng.integers(0, 256, length, dtype=np.uint8).tobytes()
+    elif kind == "text":
+        damaged[at : at + length] = bytes(rng.choice(list(b"0123456789()[]{},:'\" -9eLU<>|"), length).tolist())
+    elif kind == "zero":
+        damaged[at : at + length] = bytes(length)
+    elif kind == "repeat":
+        damaged[at:at] = data[at : at + length]
+    else:
+        del damaged[at : at + length]
+    return f"{kind} {length} bytes at {at}", bytes(damaged)
+
+
+MUTATIONS = (
+    "drop", "extra", "rename", "object", "bytes", "complex", "as text", "as number", "nan", "inf",
+    "-inf", "huge", "negate", "zero", "float32", "int", "add a dimension", "drop a row", "empty name",
+    "transpose", "scalar as a list",
+)  # fmt: skip
+"""The ways :func:`mutate` changes one field of a saved file."""
+
+
+def mutate(entries: dict[str, np.ndarray], rng: np.random.Generator) -> tuple[str, str, dict[str, np.ndarray]]:
+    """``entries`` (a saved file's arrays by name) with one field changed one way of
+    :data:`MUTATIONS`: (the way, the field, the new entries)."""
+    kind = str(rng.choice(MUTATIONS))
+    name = str(rng.choice(sorted(entries)))
+    value = np.asarray(entries[name])
+    changed = dict(entries)
+    numeric = value.dtype.kind in "iuf"
+    if kind == "drop":
+        del changed[name]
+    elif kind == "extra":
+        changed["extra_field"] = np.zeros(3)
+    elif kind == "rename":
+        changed[name + "_renamed"] = changed.pop(name)
+    elif kind == "object":
+        changed[name] = np.array([value.tolist(), None], dtype=object)
+    elif kind == "bytes":
+        changed[name] = np.array(b"bytes")
+    elif kind == "complex":
+        changed[name] = value.astype(complex) if numeric else np.array(1j)
+    elif kind == "as text":
+        changed[name] = value.astype(str)
+    elif kind == "as number":
+        changed[name] = np.array(1.0)
+    elif kind in ("nan", "inf", "-inf", "huge", "negate", "zero") and value.dtype.kind == "f" and value.size:
+        spoilt = value.copy()
+        spot = np.unravel_index(int(rng.integers(0, value.size)), value.shape)
+        if kind == "negate":
+            spoilt = -spoilt
+        else:
+            spoilt[spot] = {"nan": np.nan, "inf": np.inf, "-inf": -np.inf, "huge": 1e300, "zero": 0.0}[kind]
+        changed[name] = spoilt
+    elif kind == "float32" and numeric:
+        changed[name] = value.astype(np.float32)
+    elif kind == "int" and numeric:
+        changed[name] = value.astype(np.int64)
+    elif kind == "add a dimension":
+        changed[name] = value[None]
+    elif kind == "drop a row" and value.ndim and len(value):
+        changed[name] = value[:-1]
+    elif kind == "empty name" and value.dtype.kind == "U" and value.size:
+        spoilt = value.copy()
+        spoilt.reshape(-1)[int(rng.integers(0, value.size))] = ""
+        changed[name] = spoilt
+    elif kind == "transpose" and value.ndim == 2:
+        changed[name] = value.T
+    elif kind == "scalar as a list" and value.ndim == 0:
+        changed[name] = value[None]
+    else:
+        return mutate(entries, rng)  # that way does not apply to that field: another
+    return kind, name, changed
+
+
+def npy(shape: tuple[int, ...], descr: object = "<f8", data: bytes = b"") -> bytes:
+    """The bytes of an .npy array (format 1.0) whose header declares ``shape`` and ``descr``,
+    followed by ``data`` (which need not hold that shape: a header may lie)."""
+    header = repr({"descr": descr, "fortran_order": False, "shape": shape}).encode("latin1")
+    header += b" " * (63 - (10 + len(header)) % 64) + b"\n"
+    return b"\x93NUMPY\x01\x00" + struct.pack("<H", len(header)) + header + data
+
+
+def raw_zip(members: list[tuple[str, bytes, int, int, int]]) -> bytes:
+    """A zip archive written byte by byte, its members given as (name, data as stored in
+    the zip, method: 0 stored or 8 deflated, crc32, declared uncompressed size): what a
+    damaged or hostile file may declare, which zipfile would not write."""
+    body, directory = b"", b""
+    for name, data, method, crc, size in members:
+        encoded = name.encode()
+        fields = struct.pack("<HHHHHIII", 20, 0, method, 0, 0, crc, len(data), size)
+        directory += (
+            b"PK\x01\x02"
+            + struct.pack("<H", 20)
+            + fields
+            + struct.pack("<HHHHHII", len(encoded), 0, 0, 0, 0, 0, len(body))
+            + encoded
+        )
+        body += b"PK\x03\x04" + fields + struct.pack("<HH", len(encoded), 0) + encoded + data
+    end = struct.pack("<HHHHIIH", 0, 0, len(members), len(members), len(directory), len(body), 0)
+    return body + directory + b"PK\x05\x06" + end
+
+
+def deflated_zeros(prefix: bytes, mebibytes: int) -> tuple[bytes, int, int]:
+    """``prefix`` then ``mebibytes`` MiB of zeros, deflated (about 1000 to 1, built fast from
+    one repeated block): (the raw deflate stream, its crc32, its uncompressed size)."""
+    zeros = bytes(1 << 20)
+    compressor = zlib.compressobj(9, zlib.DEFLATED, -15)
+    head = compressor.compress(prefix + zeros) + compressor.flush(zlib.Z_FULL_FLUSH)
+    block = compressor.compress(zeros) + compressor.flush(zlib.Z_FULL_FLUSH)
+    stream = head + block * (mebibytes - 1) + compressor.flush()
+    crc = zlib.crc32(prefix)
+    for _ in range(mebibytes):
+        crc = zlib.crc32(zeros, crc)
+    return stream, crc, len(prefix) + (mebibytes << 20)
+
+
+def npz_members(path: Path) -> list[tuple[str, bytes, int, int, int]]:
+    """The members of an .npz numpy wrote, as :func:`raw_zip` takes them (to rewrite one)."""
+    with zipfile.ZipFile(path) as archive:
+        members = []
+        for info in archive.infolist():
+            data = archive.read(info)
+            stored = data if info.compress_type == zipfile.ZIP_STORED else zlib.compress(data)[2:-4]
+            members.append((info.filename, stored, info.compress_type, zlib.crc32(data), len(data)))
+        return members
+
+
+def outcome(load: Callable[[Path], object], path: Path, label: str = "") -> str:
+    """ "loaded" or "refused": ``load(path)`` either returns, or raises an InputError whose
+    message names the file; any other exception fails the test (the label says what file)."""
+    try:
+        load(path)
+    except pinrate.InputError as error:
+        assert str(path) in str(error), f"{label}: the message does not name the file: {error}"
+        return "refused"
+    except Exception as error:
+        raise AssertionError(f"{label}: {type(error).__name__} instead of an InputError: {error}") from error
+    return "loaded"
+
+
+def load_with_timeout(load: Callable[[Path], object], path: Path, timeout: float = 10.0) -> BaseException | None:
+    """What ``load(path)`` raised (None when it returned), run on a thread; AssertionError
+    if it is still running after ``timeout`` s (a FIFO opened for reading blocks until a
+    writer comes: one is opened then, so that the thread ends)."""
+    result: list[BaseException | None] = []
+
+    def run() -> None:
+        try:
+            load(path)
+            result.append(None)
+        except BaseException as error:
+            result.append(error)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(timeout)
+    if thread.is_alive():
+        with contextlib.suppress(OSError):  # a writer lets a blocked open of a FIFO return
+            os.close(os.open(path, os.O_WRONLY | os.O_NONBLOCK))
+        thread.join(5.0)
+        raise AssertionError(f"loading {path} still ran after {timeout:g} s")
+    return result[0]
+
+
+def run_python(code: str, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+    """``code`` run by this interpreter in a fresh process that imports this pinrate."""
+    source = str(Path(pinrate.__file__).parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([source, os.environ.get("PYTHONPATH", "")])}
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout, env=env, check=False
+    )
+
+
+def peak_memory_of_load(owner: str, path: Path) -> tuple[int, str]:
+    """The growth of the peak resident memory (bytes, Linux) of a fresh process while it
+    runs ``owner.load(path)`` (``owner`` a dotted name: "pinrate.Trajectory"), and what the
+    load did: "loaded", or the exception's type and message."""
+    module, _, name = owner.rpartition(".")
+    code = textwrap.dedent(f"""
+        import importlib, resource
+        load = getattr(importlib.import_module({module!r}), {name!r}).load
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        try:
+            load({str(path)!r})
+            what = "loaded"
+        except BaseException as error:
+            what = type(error).__name__ + ": " + str(error)
+        after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        print((after - before) * 1024)
+        print(what)
+    """)
+    result = run_python(code)
+    assert result.returncode == 0, result.stderr[-3000:]
+    growth, what = result.stdout.split("\n", 1)
+    return int(growth), what.strip()
+
+
+def save_under_a_file_size_limit(setup: str, path: Path, limit: int) -> str:
+    """Run ``setup`` (code that leaves an object with a ``save`` method in ``saved``) in a
+    fresh process, then ``saved.save(path)`` with RLIMIT_FSIZE at ``limit`` bytes and
+    SIGXFSZ ignored, so a write past it fails with EFBIG part-way; what the save did:
+    "saved", or the exception's type and message."""
+    code = textwrap.dedent(setup) + textwrap.dedent(f"""
+        import resource, signal
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))
+        try:
+            saved.save({str(path)!r})
+            print("saved")
+        except BaseException as error:
+            print(type(error).__name__ + ": " + str(error))
+    """)
+    result = run_python(code)
+    assert result.returncode == 0, result.stderr[-3000:]
+    return result.stdout.strip()
+
+
+def special_files(folder: Path) -> list[tuple[str, Path, str]]:
+    """Paths that are no regular file, or one that cannot be read, with what a loader's
+    message must say of each: (label, path, a regular expression of the message)."""
+    fifo = folder / "fifo.npz"
+    os.mkfifo(fifo)
+    subfolder = folder / "folder.npz"
+    subfolder.mkdir()
+    unreadable = folder / "unreadable.npz"
+    unreadable.write_bytes(b"PK\x05\x06" + bytes(18))
+    unreadable.chmod(0)
+    cases = [("a FIFO", fifo, "FIFO"), ("a folder", subfolder, "folder"), ("a device", Path("/dev/null"), "device")]
+    if os.access(unreadable, os.R_OK):  # root reads it; not a file of /proc/sys it may only write
+        unreadable = Path("/proc/sys/vm/compact_memory")
+    if unreadable.exists():
+        cases.append(("an unreadable file", unreadable, "cannot be read: Permission denied"))
+    return cases

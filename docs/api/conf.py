@@ -61,7 +61,7 @@ nitpick_ignore_regex = [
     (r"py:.*", r"(pin|pinocchio)\..*"),  # pin.SE3, pinocchio.Model, ...
     (r"py:.*", r"(meshcat|tornado|matplotlib|dask|distributed)\..*"),
     # The standard library's classes (its builtins and typing's names resolve without this).
-    (r"py:.*", r"(collections\.abc|pathlib|os|argparse|types|threading|xml\.etree\.ElementTree)\.\w+"),
+    (r"py:.*", r"(collections\.abc|pathlib|os|argparse|types|threading|zipfile|xml\.etree\.ElementTree)\.\w+"),
 ]
 
 logger = logging.getLogger(__name__)

@@ -218,3 +218,34 @@ def test_save_replay_animates_the_recorded_configurations(tmp_path) -> None:
         np.testing.assert_allclose(sign * quaternions[index], expected[3:], atol=1e-6)
     with Viewer(robot) as live, pytest.raises(pinrate.InputError, match="offline"):
         live.save_replay(tmp_path / "x.html", configurations)
+
+
+def test_a_page_that_fails_part_way_leaves_the_old_page(tmp_path, monkeypatch) -> None:
+    """save_replay and save_html write whole pages or none: a write that fails part-way (a
+    full disk) is an InputError naming the file, the page it was replacing left as it was
+    and no temporary file left beside it."""
+    import errno
+
+    from pinrate.viewer.offline import SceneCommands
+
+    robot = pinrate.load("ur5")
+    viewer = Viewer(robot, offline=True)
+    viewer.show(robot.home())
+    pieces = SceneCommands.html_pieces
+
+    def fails_part_way(self, *args, **kwargs):
+        for count, piece in enumerate(pieces(self, *args, **kwargs)):
+            if count == 3:
+                raise OSError(errno.ENOSPC, "No space left on device")
+            yield piece
+
+    monkeypatch.setattr(SceneCommands, "html_pieces", fails_part_way)
+    page = tmp_path / "replay.html"
+    for save in (lambda: viewer.save_replay(page, np.array([robot.home()] * 3)), lambda: viewer.save_html(page)):
+        page.write_text("the old page", encoding="utf-8")
+        with pytest.raises(pinrate.InputError, match=r"replay\.html.*No space left on device"):
+            save()
+        assert page.read_text(encoding="utf-8") == "the old page"
+        assert os.listdir(tmp_path) == ["replay.html"]
+    monkeypatch.setattr(SceneCommands, "html_pieces", pieces)
+    assert viewer.save_html(page) == page and "<html>" in page.read_text(encoding="utf-8")

@@ -4,15 +4,15 @@
 from __future__ import annotations
 
 import os
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..checks import check_output_file
-from ..errors import InputError, PinrateError
+from ..checks import PHYSICAL_BOUND
+from ..errors import PinrateError
+from ..files import MAX_LOAD_BYTES, NUMBERS, Npz, open_npz, replace_file
 from ..kinematics.partition import Partition
 from .status import Status
 
@@ -105,8 +105,10 @@ class Trajectory:
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the trajectory to ``path`` as an uncompressed ``.npz`` of plain arrays (no
-        pickles: :meth:`load` reads it with ``allow_pickle=False``); returns the path."""
-        target = check_output_file(path, "trajectory file")
+        pickles: :meth:`load` reads no object); returns the path. The file is written whole
+        or not at all (:func:`~pinrate.files.replace_file`): a save that fails leaves the
+        file it was replacing as it was. InputError naming the file for a path that cannot
+        be written or a write that fails."""
         arrays = {name: np.asarray(getattr(self, name), dtype=float) for name in _ARRAYS}
         texts = {
             name: np.array(value)
@@ -117,67 +119,76 @@ class Trajectory:
                 ("angular", self.partition.angular),
             )
         }
-        with target.open("wb") as stream:  # a file object: numpy would append ".npz" to a name
-            entries: dict[str, Any] = {
-                "format": np.array(FORMAT),
-                "status": np.array(self.status, dtype=str),
-                "detail": np.array(self.detail, dtype=str),
-                "arm": np.array(self.partition.arm, dtype=str),
-                "wrist": np.array(self.partition.wrist, dtype=str),
-                "converged": np.array(self.converged),
-                "dt": np.array(self.dt),
-                **arrays,
-                **texts,
-            }
-            np.savez(stream, **entries)
-        return target
+        entries: dict[str, Any] = {
+            "format": np.array(FORMAT),
+            "status": np.array(self.status, dtype=str),
+            "detail": np.array(self.detail, dtype=str),
+            "arm": np.array(self.partition.arm, dtype=str),
+            "wrist": np.array(self.partition.wrist, dtype=str),
+            "converged": np.array(self.converged),
+            "dt": np.array(self.dt),
+            **arrays,
+            **texts,
+        }
+        # To a stream: numpy would append ".npz" to a name.
+        return replace_file(path, "trajectory file", lambda stream: np.savez(stream, **entries))
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> Trajectory:
-        """A trajectory written by :meth:`save`.
+    def load(cls, path: str | os.PathLike[str], *, max_bytes: int = MAX_LOAD_BYTES) -> Trajectory:
+        """A trajectory written by :meth:`save` (format ``pinrate-trajectory-2``, or ``-1``
+        with its step words renamed by :data:`RENAMED_WORDS`).
+
+        Read by :func:`~pinrate.files.open_npz`: a regular file only, every array's header
+        checked before anything is read, and refused when reading it would take more than
+        ``max_bytes`` (:data:`~pinrate.files.MAX_LOAD_BYTES`, 2 GiB). Then every field is
+        checked: q floats (N, nq) with N, nq >= 1; position_error, orientation_error (N,)
+        and spectral_radius (N,) floats >= 0 (ρ may be inf); joint_rates floats (N - 1, nv);
+        every number finite within ±:data:`~pinrate.checks.PHYSICAL_BOUND` but ρ; status
+        (N,) text; detail (N,) text or empty (absent in ``-1``); converged a boolean; dt a
+        positive finite number up to PHYSICAL_BOUND; reason, algorithm, linear, angular one
+        text each; arm and wrist lists of joint names (non-empty, printable) that make a
+        :class:`~pinrate.kinematics.partition.Partition`. A field more or fewer is refused.
 
         Raises:
-            InputError: a missing file, a file that is not a saved pinrate trajectory, or one
-                whose arrays do not fit together.
+            InputError: naming the file (and the field): a missing file or one that is not
+                a regular file, not a saved pinrate trajectory, too big, damaged, or whose
+                fields do not hold what they must or do not fit together.
         """
-        source = Path(path)
-        if not source.is_file():
-            raise InputError(f"trajectory file {str(source)!r} does not exist")
-        if not zipfile.is_zipfile(source):  # numpy would take any other bytes for a pickle
-            raise InputError(f"{str(source)!r} is not a pinrate trajectory (not an .npz archive)")
-        try:
-            with np.load(source, allow_pickle=False) as data:
-                version = str(data["format"]) if "format" in data.files else ""
-                if version not in (FORMAT, _FIRST_FORMAT):
-                    raise InputError(f"{str(source)!r} is not a pinrate trajectory (no format {FORMAT!r})")
-                missing = [
-                    name
-                    for name in (*_ARRAYS, *_TEXTS, "status", "arm", "wrist", "converged", "dt")
-                    if name not in data.files
-                ]
-                if missing:
-                    raise InputError(f"trajectory file {str(source)!r} lacks {', '.join(missing)}")
-                arrays = {name: np.array(data[name], dtype=float) for name in _ARRAYS}
-                texts = {name: str(data[name]) for name in _TEXTS}
-                status = [str(word) for word in data["status"]]
-                if version == _FIRST_FORMAT:
-                    status = [RENAMED_WORDS.get(word, word) for word in status]
-                detail = [str(words) for words in data["detail"]] if "detail" in data.files else []
-                arm, wrist = [str(j) for j in data["arm"]], [str(j) for j in data["wrist"]]
-                converged, dt = bool(data["converged"]), float(data["dt"])
-        except (OSError, ValueError, zipfile.BadZipFile) as error:
-            raise InputError(f"trajectory file {str(source)!r} cannot be read: {error}") from None
-        count = arrays["q"].shape[0]
-        if any(arrays[name].shape != (count,) for name in _ARRAYS[1:4]) or arrays["joint_rates"].shape[0] != max(
-            count - 1, 0
-        ):
-            raise InputError(f"trajectory file {str(source)!r}: its arrays do not fit together")
-        if detail and len(detail) != count:
-            raise InputError(f"trajectory file {str(source)!r}: {len(detail)} details for {count} configurations")
-        try:
-            partition = Partition(arm, wrist, linear=texts["linear"], angular=texts["angular"])
-        except PinrateError as error:
-            raise InputError(f"trajectory file {str(source)!r}: {error}") from None
+        with open_npz(path, "trajectory file", max_bytes=max_bytes) as npz:
+            version = _version(npz)
+            npz.fields((*_FIELDS, "detail") if version == FORMAT else _FIELDS, ("detail",))
+            rows, nq = npz.shape("q", NUMBERS, 2)
+            if rows < 1 or nq < 1:
+                raise npz.refuse(f"has shape {(rows, nq)}: a trajectory holds its start at least", "q")
+            for name in _ARRAYS[1:4]:
+                if npz.shape(name, NUMBERS, 1) != (rows,):
+                    raise npz.refuse(f"has shape {npz.members[name].shape}, not ({rows},) as q's rows", name)
+            steps = npz.shape("joint_rates", NUMBERS, 2)[0]
+            if steps != rows - 1:
+                raise npz.refuse(f"has {steps} rows for {rows} configurations, not {rows - 1}", "joint_rates")
+            for name, allowed in (("status", (rows,)), ("detail", (rows, 0))):
+                if name in npz.members and npz.shape(name, "U", 1)[0] not in allowed:
+                    raise npz.refuse(f"has {npz.members[name].shape[0]} entries for {rows} configurations", name)
+            arrays = {name: npz.floats(name, 2) for name in ("q", "joint_rates")}
+            arrays.update({name: npz.floats(name, 1) for name in _ARRAYS[1:3]})
+            arrays["spectral_radius"] = npz.floats("spectral_radius", 1, finite=False)
+            for name in _ARRAYS[1:4]:
+                if (arrays[name] < 0).any():
+                    raise npz.refuse(f"holds a negative value at {int(np.argmax(arrays[name] < 0))}", name)
+            status = npz.texts("status")
+            if version == _FIRST_FORMAT:
+                status = [RENAMED_WORDS.get(word, word) for word in status]
+            detail = npz.texts("detail") if "detail" in npz.members else []
+            dt = npz.number("dt")
+            if not 0 < dt <= PHYSICAL_BOUND:
+                raise npz.refuse(f"is {dt!r}: not a positive finite number up to {PHYSICAL_BOUND:g} s", "dt")
+            converged = npz.flag("converged")
+            texts = {name: npz.text(name) for name in _TEXTS}
+            arm, wrist = npz.names("arm"), npz.names("wrist")
+            try:
+                partition = Partition(arm, wrist, linear=texts["linear"], angular=texts["angular"])
+            except PinrateError as error:
+                raise npz.refuse(f"holds no partition in 'arm', 'wrist', 'linear', 'angular': {error}") from None
         return cls(
             status=status,
             converged=converged,
@@ -188,3 +199,16 @@ class Trajectory:
             detail=detail,
             **arrays,
         )
+
+
+_FIELDS = ("format", *_ARRAYS, *_TEXTS, "status", "arm", "wrist", "converged", "dt")
+
+
+def _version(npz: Npz) -> str:
+    """The file's format, if it is one :meth:`Trajectory.load` reads; InputError otherwise."""
+    if "format" not in npz.members:
+        raise npz.refuse(f"is not a pinrate trajectory (no format {FORMAT!r})")
+    version = npz.text("format")
+    if version not in (FORMAT, _FIRST_FORMAT):
+        raise npz.refuse(f"is not a pinrate trajectory: format {version[:80]!r}, not {FORMAT!r}")
+    return version

@@ -85,17 +85,29 @@ class Recordings:
             LOG.error("the recording could not be saved", exc_info=error)
 
     def _write(self, recording: Recording) -> None:
+        """Each file is written whole or not at all (:func:`~pinrate.files.replace_file`), so
+        only whole files are served; a recording whose replay fails is still saved and said."""
         stem = self._stem()
         try:
             data = recording.save(stem.with_suffix(".npz"))
+        except PinrateError as error:
+            self.say(f"the recording could not be saved: {error}", "error")
+            return
+        self.saved.append(data)
+        self.served[data.name] = data
+        try:
             # The console's own scene, already encoded: no mesh is read again, and no step
             # holds the GIL long enough to delay the control loop's tick.
             page = self.viewer.save_replay(stem.with_suffix(".html"), recording.frames(REPLAY_FPS), fps=REPLAY_FPS)
-        except (PinrateError, OSError) as error:
-            self.say(f"the recording could not be saved: {error}", "error")
+        except PinrateError as error:
+            self.say(
+                f"saved {len(recording)} ticks: {data.name}; its replay could not be written: {error}",
+                "error",
+                links=[self.link(data.name)],
+            )
             return
-        self.saved += [data, page]
-        self.served.update({data.name: data, page.name: page})
+        self.saved.append(page)
+        self.served[page.name] = page
         self.say(
             f"saved {len(recording)} ticks: {data.name}, {page.name}",
             links=[self.link(data.name), self.link(page.name)],

@@ -11,16 +11,17 @@ from __future__ import annotations
 
 import math
 import os
-import zipfile
 from collections import deque
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from ..checks import MAX_SAMPLES, check_count, check_output_file, check_positive
+from ..checks import MAX_SAMPLES, PHYSICAL_BOUND, check_count, check_positive
 from ..control.controller import Step
 from ..control.status import Status
-from ..errors import InputError, PinrateError
+from ..errors import InputError
+from ..files import MAX_LOAD_BYTES, NUMBERS, open_npz, replace_file
 from ..kinematics.manipulator import Robot
 
 FORMAT = "pinrate-teleop-2"
@@ -165,63 +166,109 @@ class Recording:
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the run as ``.npz`` (numbers and strings only: loads without pickle); zero
-        ticks are saved as empty columns. InputError for a path that cannot be written."""
-        target = check_output_file(path, "recording file")
+        ticks are saved as empty columns. The file is written whole or not at all
+        (:func:`~pinrate.files.replace_file`): a save that fails leaves the file it was
+        replacing as it was. InputError naming the file for a path that cannot be written
+        or a write that fails."""
         start = self.start if self.start is not None else np.zeros(0)
-        with target.open("wb") as stream:
-            np.savez_compressed(
-                stream,
-                format=np.array(FORMAT),
-                robot=np.array(self.robot_name),
-                joint_names=np.array(self.joint_names, dtype=str),
-                dt=np.array(self.dt),
-                start=start,
-                times=self.times,
-                q=self.q,
-                joint_rates=self.joint_rates,
-                status=self.status,
-                detail=self.detail,
-            )
-        return target
+        columns: dict[str, Any] = {
+            "format": np.array(FORMAT),
+            "robot": np.array(self.robot_name),
+            "joint_names": np.array(self.joint_names, dtype=str),
+            "dt": np.array(self.dt),
+            "start": start,
+            "times": self.times,
+            "q": self.q,
+            "joint_rates": self.joint_rates,
+            "status": self.status,
+            "detail": self.detail,
+        }
+        return replace_file(path, "recording file", lambda stream: np.savez_compressed(stream, **columns))
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> Recording:
-        """Read what :meth:`save` wrote, every column as it was saved. PinrateError naming
-        the file when it is not a teleop recording; InputError when it cannot be read or its
-        columns do not fit together (lengths, widths, times that decrease)."""
-        try:
-            with np.load(Path(path), allow_pickle=False) as data:
-                version = str(data["format"])
-                if version not in (FORMAT, _FIRST_FORMAT):
-                    raise PinrateError(f"{path}: not a pinrate teleop recording (format {data['format']})")
-                times = np.asarray(data["times"], dtype=float)
-                q, rates = data["q"], data["joint_rates"]
-                status, detail, start = data["status"], data["detail"], data["start"]
-                recording = cls(None, float(data["dt"]), max_samples=max(1, times.size))
-                robot_name, joint_names = str(data["robot"]), tuple(str(name) for name in data["joint_names"])
-        except (OSError, KeyError, ValueError, zipfile.BadZipFile) as error:
-            raise InputError(f"cannot read a teleop recording from {path}: {error}") from None
-        count = times.size
-        if times.ndim != 1 or q.ndim != 2 or rates.ndim != 2 or status.ndim != 1 or detail.ndim != 1:
-            raise InputError(f"{path}: the recording's columns have the wrong dimensions")
-        if not len(q) == len(rates) == len(status) == len(detail) == count:
-            raise InputError(f"{path}: the recording's columns differ in length")
-        if start.size and start.shape != (q.shape[1],):
-            raise InputError(f"{path}: the start has {start.size} coordinates, the ticks {q.shape[1]}")
-        if count and not (np.isfinite(times).all() and (np.diff(times) >= 0).all()):
-            raise InputError(f"{path}: the recording's times are not finite and non-decreasing")
+    def load(cls, path: str | os.PathLike[str], *, max_bytes: int = MAX_LOAD_BYTES) -> Recording:
+        """Read what :meth:`save` wrote, every column as it was saved (format
+        ``pinrate-teleop-2``, or ``-1`` with its :class:`~pinrate.Status` values read as
+        their words).
+
+        Read by :func:`~pinrate.files.open_npz`: a regular file only, every array's header
+        checked before anything is read, and refused when reading it would take more than
+        ``max_bytes`` (:data:`~pinrate.files.MAX_LOAD_BYTES`, 2 GiB; each tick counted with
+        the :data:`TICK_OBJECT_BYTES` of the objects that hold it). Then every field is
+        checked: times (N,) floats, finite and non-decreasing; q (N, nq) and joint_rates
+        (N, nv) floats; start (nq,) floats or empty; every number finite within
+        ±:data:`~pinrate.checks.PHYSICAL_BOUND` but the times (finite); status and detail
+        (N,) text (status a :class:`~pinrate.Status` value in ``-1``); dt a positive finite
+        number up to PHYSICAL_BOUND; robot one text; joint_names a list of non-empty
+        printable names. A field more or fewer is refused.
+
+        Raises:
+            InputError: naming the file (and the field): a missing file or one that is not
+                a regular file, not a teleop recording, too big, damaged, or whose fields do
+                not hold what they must or do not fit together.
+        """
+        with open_npz(path, "recording file", max_bytes=max_bytes) as npz:
+            if "format" not in npz.members:
+                raise npz.refuse(f"is not a pinrate teleop recording (no format {FORMAT!r})")
+            version = npz.text("format")
+            if version not in (FORMAT, _FIRST_FORMAT):
+                raise npz.refuse(f"is not a pinrate teleop recording: format {version[:80]!r}, not {FORMAT!r}")
+            npz.fields(_FIELDS)
+            (count,) = npz.shape("times", NUMBERS, 1)
+            nq, nv = npz.shape("q", NUMBERS, 2)[1], npz.shape("joint_rates", NUMBERS, 2)[1]
+            for name, shape in (("q", (count, nq)), ("joint_rates", (count, nv))):
+                if npz.members[name].shape != shape:
+                    raise npz.refuse(
+                        f"has shape {npz.members[name].shape} for {count} ticks: the columns differ in length", name
+                    )
+            if count and not (nq and nv):
+                raise npz.refuse(
+                    f"has shape {npz.members['q' if not nq else 'joint_rates'].shape}: ticks without coordinates",
+                    "q" if not nq else "joint_rates",
+                )
+            for name in ("status", "detail"):
+                if npz.shape(name, "U", 1) != (count,):
+                    raise npz.refuse(
+                        f"has {npz.members[name].shape[0]} entries for {count} ticks: the columns differ in length",
+                        name,
+                    )
+            if npz.shape("start", NUMBERS, 1) not in ((0,), (nq,)):
+                raise npz.refuse(f"has {npz.members['start'].shape[0]} coordinates, the ticks {nq}", "start")
+            npz.reserve(count * TICK_OBJECT_BYTES)
+            dt = npz.number("dt")
+            if not 0 < dt <= PHYSICAL_BOUND:
+                raise npz.refuse(f"is {dt!r}: not a positive finite number up to {PHYSICAL_BOUND:g} s", "dt")
+            times = npz.floats("times", 1, finite=False)
+            if not np.isfinite(times).all():
+                raise npz.refuse(f"holds {times[~np.isfinite(times)][0]!r}: times must be finite", "times")
+            if count and (np.diff(times) < 0).any():
+                raise npz.refuse(
+                    f"decreases at tick {int(np.argmax(np.diff(times) < 0)) + 1}: times must be non-decreasing", "times"
+                )
+            q, rates, start = npz.floats("q", 2), npz.floats("joint_rates", 2), npz.floats("start", 1)
+            status, detail = npz.texts("status"), npz.texts("detail")
+            robot_name, joint_names = npz.text("robot"), tuple(npz.names("joint_names"))
+            if version == _FIRST_FORMAT:
+                unknown = sorted({value for value in status if value not in _STATUS_VALUES})
+                if unknown:
+                    raise npz.refuse(f"holds {unknown[0][:80]!r}, which no Status has", "status")
+                status = [Status(value).word for value in status]
+        recording = cls(None, dt, max_samples=max(1, count))
         recording.robot_name, recording.joint_names = robot_name, joint_names
-        recording.nq, recording.nv = q.shape[1], rates.shape[1]
+        recording.nq, recording.nv = nq, nv
         if start.size:
-            recording.start = np.array(start, dtype=float)
-        if version == _FIRST_FORMAT:
-            try:
-                status = np.array([Status(str(value)).word for value in status], dtype=str)
-            except ValueError as error:
-                raise InputError(f"{path}: {error}") from None
-        for time, configuration, rate, word, reason in zip(times, q, rates, status, detail, strict=True):
-            recording._ticks.append((float(time), configuration, rate, str(word), str(reason)))
+            recording.start = start
+        recording._ticks.extend(zip(times.tolist(), q, rates, status, detail, strict=True))
         return recording
+
+
+_STATUS_VALUES = frozenset(status.value for status in Status)
+
+_FIELDS = ("format", "robot", "joint_names", "dt", "start", "times", "q", "joint_rates", "status", "detail")
+
+TICK_OBJECT_BYTES = 400
+"""Bytes a loaded tick's objects take beyond its numbers and text (a tuple, a float, two
+array views: about 335 measured), counted against ``max_bytes`` by :meth:`Recording.load`."""
 
 
 __all__ = ["FORMAT", "Recording"]

@@ -14,10 +14,13 @@ import html
 import threading
 from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import IO
 
 import meshcat
 import numpy as np
 import umsgpack
+
+from ..files import replace_file
 
 MAIN_JS = Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
 """meshcat's browser viewer (three.js and the scene-command decoder), as its server serves it."""
@@ -74,14 +77,20 @@ class SceneCommands:
         then ``extra`` (packed commands, e.g. a replay's animation)."""
         return "".join(self.html_pieces(title, extra))
 
-    def write_html(self, path: Path, title: str = "pinrate", extra: Sequence[bytes] = ()) -> Path:
+    def write_html(
+        self, path: Path, title: str = "pinrate", extra: Sequence[bytes] = (), *, what: str = "replay file"
+    ) -> Path:
         """:meth:`static_html` written to ``path`` piece by piece: no step of the write holds
         the GIL for long (a control loop in another thread keeps its period; one call
-        encoding a whole 9 MB page held it for up to 50 ms)."""
-        with path.open("w", encoding="utf-8") as stream:
+        encoding a whole 9 MB page held it for up to 50 ms). Whole or not at all
+        (:func:`~pinrate.files.replace_file`): a write that fails leaves the file it was
+        replacing as it was, and is an InputError naming ``what`` and the path."""
+
+        def write(stream: IO[str]) -> None:
             for piece in self.html_pieces(title, extra):
                 stream.write(piece)
-        return path
+
+        return replace_file(path, what, write, encoding="utf-8")
 
     def html_pieces(self, title: str = "pinrate", extra: Sequence[bytes] = ()) -> Iterator[str]:
         """The page of :meth:`static_html` in pieces of at most about :data:`PIECE` bytes."""

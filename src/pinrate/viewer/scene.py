@@ -38,6 +38,7 @@ import pinocchio as pin
 from ..checks import as_pose, check_output_file, check_positive, check_vector
 from ..control.trajectory import Trajectory
 from ..errors import InputError
+from ..files import replace_file
 from ..kinematics.manipulator import Robot, check_robot
 from .markers import AXIS_COLOURS, TARGET_COLOUR, arrow_parts, path_colours, triad
 from .offline import Animation, SceneCommands
@@ -293,7 +294,9 @@ class Viewer:
         return Animation(paths, poses, fps, repetitions=10**9 if loop else 1)
 
     def save_html(self, path: str | os.PathLike[str], *, fps: float = 30.0, loop: bool = True) -> Path:
-        """A standalone HTML page of the scene that replays every recorded frame, offline."""
+        """A standalone HTML page of the scene that replays every recorded frame, offline.
+        Written whole or not at all (:func:`~pinrate.files.replace_file`): a save that fails
+        leaves the file it was replacing as it was, and is an InputError naming the file."""
         fps = check_positive(fps, "fps")
         target = check_output_file(path, "replay file")
         animation = self._animation(self._frames, fps, loop) if self._frames else None
@@ -301,8 +304,8 @@ class Viewer:
             return self.scene.write_html(target, extra=[animation.packed()] if animation else [])
         if animation is not None:
             self.meshcat.set_animation(animation, play=True, repetitions=animation.repetitions)
-        target.write_text(self.meshcat.static_html(), encoding="utf-8")
-        return target
+        page = self.meshcat.static_html()
+        return replace_file(target, "replay file", lambda stream: stream.write(page), encoding="utf-8")
 
     def save_replay(
         self, path: str | os.PathLike[str], configurations: np.ndarray, *, fps: float = 30.0, loop: bool = True
@@ -312,7 +315,8 @@ class Viewer:
 
         Safe beside a thread that draws with this viewer (the teleop console's render thread):
         the poses come from a Pinocchio data of this call's own, and the scene's commands,
-        already encoded, are reused rather than the meshes read and encoded again.
+        already encoded, are reused rather than the meshes read and encoded again. Written
+        whole or not at all, as :meth:`save_html`.
         """
         if self.scene is None:
             raise InputError("save_replay needs an offline viewer (Viewer(robot, offline=True))")
