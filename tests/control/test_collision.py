@@ -228,6 +228,31 @@ def test_drives_into_itself_end_before_the_meshes_touch() -> None:
         assert statuses & {Status.DECELERATE_FOR_COLLISION, Status.HALT_FOR_COLLISION}  # the monitor had work to do
 
 
+def test_the_approach_rate_of_overlapping_hulls_is_the_derivative_of_the_signed_distance() -> None:
+    # Hulls are fatter than meshes: a robot may start with two hulls overlapping (d < 0). The
+    # nearest points then point against the normal; ḋ must still be the derivative of d, or
+    # the motion away halts and the motion deeper is let through.
+    robot = pinrate.load("ur5")
+    monitor = CollisionMonitor(robot)
+    rng = np.random.default_rng(5)
+    lower, upper = robot.model.lowerPositionLimit, robot.model.upperPositionLimit
+    checked, h = 0, 1e-5
+    while checked < 30:
+        q = rng.uniform(lower, upper)
+        distances = monitor._distances(q)
+        overlapping = [int(i) for i in np.flatnonzero(distances < 0.0)]
+        if not overlapping:
+            continue
+        rates = rng.normal(size=robot.nv) * 0.5
+        approach = monitor.approach_rates(q, rates, overlapping)
+        after = monitor._distances(pin.integrate(robot.model, q, rates * h))[overlapping]
+        before = monitor._distances(pin.integrate(robot.model, q, -rates * h))[overlapping]
+        ahead, behind = (after - distances[overlapping]) / h, (distances[overlapping] - before) / h
+        smooth = np.abs(ahead - behind) < 1e-3  # not on a kink of d (a change of nearest features)
+        np.testing.assert_allclose(approach[smooth], ahead[smooth], rtol=1e-2, atol=1e-3)
+        checked += int(smooth.sum())
+
+
 def test_a_mesh_with_no_hull_is_monitored_as_its_mesh_and_said_once() -> None:
     # A flat plate (two triangles): qhull finds no 3-D hull, and coal 3.0's convexHull would
     # end the process on it. The monitor keeps the mesh (exact, so still conservative).
