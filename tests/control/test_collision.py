@@ -83,6 +83,22 @@ def test_the_srdf_disabled_pairs_and_adjacent_links_are_not_monitored() -> None:
     assert frozenset(("panda_link0", "panda_leftfinger")) in pairs
 
 
+@pytest.mark.parametrize("name", ["z1", "kinova"])
+def test_no_pair_on_one_joint_or_a_joint_and_its_parent_is_monitored(name: str) -> None:
+    # Links with several collision geometries: removing a pair used to shift the binding's
+    # pair list under the loop, and the pair after each removal stayed monitored (z1: 3,
+    # kinova: 2; the loop left 14 of so101's 36 adjacent pairs).
+    robot = pinrate.load(name)
+    monitor = CollisionMonitor(robot)
+    objects, parents = monitor._geometry.geometryObjects, robot.model.parents
+    adjacent = []
+    for first, second in monitor._pairs:
+        a, b = objects[first].parentJoint, objects[second].parentJoint
+        if a == b or parents[a] == b or parents[b] == a:
+            adjacent.append((objects[first].name, objects[second].name))
+    assert monitor.pairs and not adjacent
+
+
 def test_robots_without_collision_geometry_are_skipped_and_said_once() -> None:
     robot = pinrate.load("two_link_planar")
     with warnings.catch_warnings(record=True) as caught:

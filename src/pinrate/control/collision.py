@@ -143,13 +143,17 @@ class CollisionMonitor:
         return self._model.frames[geometry_object.parentFrame].name
 
     def _remove_adjacent_pairs(self) -> None:
-        """Pairs on one joint, or on a joint and its parent, touch at the joint by design."""
+        """Pairs on one joint, or on a joint and its parent, touch at the joint by design.
+
+        The pairs are read as index pairs first: the binding's CollisionPair items are views of
+        slots in the C++ vector, which removeCollisionPair shifts under them (each removal
+        skipped the next pair: the loop left 14 of so101's 36 adjacent pairs)."""
         parents = self._model.parents
         objects = self._geometry.geometryObjects
-        for pair in list(self._geometry.collisionPairs):
-            a, b = objects[pair.first].parentJoint, objects[pair.second].parentJoint
+        for first, second in [(pair.first, pair.second) for pair in self._geometry.collisionPairs]:
+            a, b = objects[first].parentJoint, objects[second].parentJoint
             if a == b or parents[a] == b or parents[b] == a:
-                self._geometry.removeCollisionPair(pair)
+                self._geometry.removeCollisionPair(pin.CollisionPair(first, second))
 
     def _remove_pairs_in_contact(self, configurations: list[np.ndarray]) -> None:
         in_contact = set()
@@ -158,9 +162,9 @@ class CollisionMonitor:
             for index, result in enumerate(self._geometry_data.distanceResults):
                 if result.min_distance <= self.stop_distance:
                     in_contact.add(index)
-        pairs = list(self._geometry.collisionPairs)
-        for index in sorted(in_contact, reverse=True):
-            self._geometry.removeCollisionPair(pairs[index])
+        pairs = [(pair.first, pair.second) for pair in self._geometry.collisionPairs]
+        for index in sorted(in_contact):
+            self._geometry.removeCollisionPair(pin.CollisionPair(*pairs[index]))
         self._geometry_data = pin.GeometryData(self._geometry)
 
     # ------------------------------------------------------------------ measuring
