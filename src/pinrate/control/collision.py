@@ -23,15 +23,19 @@ For a pair at signed distance d (m) with nearest points p_a, p_b (world) and n t
 normal from a to b (coal: p_b - p_a = d n, so n = (p_b - p_a) / d, against p_b - p_a when the
 hulls overlap), the step's joint rates q̇ move them apart at ḋ = n · (v_b(p_b) - v_a(p_a))
 (m/s), each point's velocity from its joint's Jacobian (``LOCAL_WORLD_ALIGNED``) shifted to
-the point. A pair that approaches (ḋ < 0) under ``safety_distance`` limits the common scale s
-of all rates to
+the point. The damper bounds the speed at which a pair may approach under
+``safety_distance``: ξ (d - stop) / (safety - stop), ξ = :data:`APPROACH_SPEED`, falling to 0
+at ``stop_distance``. A pair that approaches (ḋ < 0) limits the common scale s of all rates to
 
-    s <= (d - stop) / (safety - stop)        and        d + s ḋ dt >= stop,
+    s (-ḋ) <= ξ (d - stop) / (safety - stop)        and        d + s ḋ dt >= stop,
 
-so the command slows as d falls and the step ends before ``stop_distance`` (a scale under
-:data:`HALT_SCALE` halts); a pair that separates (ḋ >= 0) never limits it, so motion away is
-always executed. The first-order prediction is checked at the integrated q when a pair is
-near: a step that would still end under the stop distance with that pair closer halts.
+so a fast approach slows as d falls and the step ends before ``stop_distance`` (a scale under
+:data:`HALT_SCALE` halts), while a pair that drifts closer slowly, well within that speed,
+does not slow the command (two links a centimetre apart at home, whose distance barely
+changes as the arm moves, would otherwise cap every motion); a pair that separates (ḋ >= 0)
+never limits it, so motion away is always executed. The first-order prediction is checked
+at the integrated q when a pair is near: a step that would still end under the stop distance
+with that pair closer halts.
 """
 
 from __future__ import annotations
@@ -49,10 +53,14 @@ from .status import Status
 
 SAFETY_DISTANCE = 0.05
 """m: under this distance an approaching pair slows the step (MoveIt Servo's default scene
-threshold is 0.02 m; pinrate starts earlier and scales linearly)."""
+threshold is 0.02 m; pinrate starts earlier, with an approach speed bound that falls linearly)."""
 
 STOP_DISTANCE = 0.01
 """m: a step that would bring a pair this close halts."""
+
+APPROACH_SPEED = 0.1
+"""m/s: the speed ξ at which a pair may approach at ``safety_distance``; the bound falls
+linearly to 0 at ``stop_distance`` (Faverjon & Tournassoud's velocity damper)."""
 
 HALT_SCALE = 0.01
 """A step the monitor would scale under this factor halts instead: the damper's scale falls to
@@ -235,8 +243,8 @@ class CollisionMonitor:
         for index, rate in zip(near, approach, strict=True):
             if rate >= 0.0:
                 continue  # separating: never limited
-            distance = float(distances[index])
-            allowed = min((distance - self.stop_distance) / span, (distance - self.stop_distance) / (-rate * dt))
+            room = float(distances[index]) - self.stop_distance
+            allowed = min(APPROACH_SPEED * room / (span * -rate), room / (-rate * dt))
             if allowed < scale:
                 scale, limiting = max(allowed, 0.0), index
         if scale > 0.0:
