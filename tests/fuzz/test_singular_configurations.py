@@ -68,7 +68,12 @@ def test_no_nan_at_singular_configurations(name: str, one_joint: pinrate.Robot) 
     radii = spectral_radius_at(robot, configurations, partition=partition)
     assert not np.isnan(radii).any()  # inf marks a singular block; NaN never
     controllers = {algorithm: Controller(robot, algorithm=algorithm) for algorithm in pinrate.ALGORITHMS}
+    free = {name: Controller(robot, algorithm=name, position_limits=False) for name in pinrate.ALGORITHMS}
     for q in configurations:
+        inside = all(
+            limits is None or limits[0] <= q[robot.model.joints[robot.joint_id(name)].idx_q] <= limits[1]
+            for name, limits in ((name, robot.joint_limits(name)) for name in robot.joint_names)
+        )
         assert np.isfinite(robot.jacobian(q)).all() and np.isfinite(robot.pose(q)).all()
         try:
             result = pinrate.convergence(robot, q)
@@ -82,7 +87,12 @@ def test_no_nan_at_singular_configurations(name: str, one_joint: pinrate.Robot) 
                     assert rates.shape == (robot.nv,) and np.isfinite(rates).all(), (algorithm, q, twist)
                 except pinrate.SingularBlockError:
                     pass
-                step = controller.step(q, twist)
+                stepping = controller
+                if not inside:  # neutral, for some arms: refused by name, stepped without the limits
+                    with pytest.raises(pinrate.InputError, match="outside the position limits"):
+                        controller.step(q, twist)
+                    stepping = free[algorithm]
+                step = stepping.step(q, twist)
                 assert np.isfinite(step.q).all() and np.isfinite(step.joint_rates).all(), (algorithm, q)
                 assert step.q.shape == (robot.nq,)
 
