@@ -42,6 +42,19 @@ def positive(text: str) -> float:
     return value
 
 
+def within(low: float, high: float) -> type[float]:
+    """An argparse type: a number in [``low``, ``high``]."""
+
+    def parse(text: str) -> float:
+        value = finite(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be from {low:g} to {high:g}, got {text}")
+        return value
+
+    parse.__name__ = f"number in [{low:g}, {high:g}]"
+    return parse  # type: ignore[return-value]
+
+
 def finite(text: str) -> float:
     """An argparse type: a finite number."""
     try:

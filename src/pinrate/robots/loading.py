@@ -48,9 +48,13 @@ def load(
         LoadError: missing file, malformed XML, not a URDF, a ``.xacro``, a structure fault
             (named joint or link), too many joints, no moving joint, unknown robot name.
         FrameError: unknown tip or sensor frame (the message lists the frames).
+        InputError: a tip or sensor that is not a name ("" is not the default: None is).
     """
     if max_joints is not None:
         check_count(max_joints, "max_joints", minimum=1)
+    for role, frame in (("tip", tip), ("sensor", sensor)):
+        if frame is not None and not (isinstance(frame, str) and frame.strip()):
+            raise InputError(f"{role} must name a frame (or be None for the default), got {frame!r}")
     if isinstance(source, os.PathLike) or (isinstance(source, str) and _looks_like_path(source)):
         try:
             path = Path(source).expanduser().resolve()
