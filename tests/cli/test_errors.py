@@ -28,6 +28,8 @@ def cases(tmp: Path) -> list[tuple[list[str], str]]:
         (["demo", "ur5", "--tol", "1e-20", "--no-viewer"], "tol must be at least 1e-12"),
         (["demo", "ur5", "--max-steps", "-5"], "--max-steps: must be at least 0"),
         (["demo", "ur5", "--max-steps", "2.5"], "--max-steps: expected an integer"),
+        (["demo", "ur5", "--max-steps", "1000001"], "--max-steps: must be at most 1,000,000"),
+        (["demo", "ur5", "--max-steps", "99999999999999999999"], "--max-steps: must be at most 1,000,000"),
         (["demo", "ur5", "--target", "0", "0", "nan", "0", "0", "0"], "--target: must be a finite number"),
         (["demo", "ur5", "--target", "1e9", "0", "0", "0", "0", "0", "--no-viewer"], "physical bound"),
         (["demo", "ur5", "--algorithm", "bogus"], "invalid choice: 'bogus'"),

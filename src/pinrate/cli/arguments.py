@@ -18,8 +18,8 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"pinrate: error: {where}{message} (see `{self.prog} --help`)\n")
 
 
-def count(minimum: int) -> type[int]:
-    """An argparse type: an integer >= ``minimum``."""
+def count(minimum: int, maximum: int | None = None) -> type[int]:
+    """An argparse type: an integer >= ``minimum`` (and <= ``maximum``)."""
 
     def parse(text: str) -> int:
         try:
@@ -28,9 +28,11 @@ def count(minimum: int) -> type[int]:
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"must be at most {maximum:,}, got {value:,}")
         return value
 
-    parse.__name__ = f"integer >= {minimum}"
+    parse.__name__ = f"integer >= {minimum}" if maximum is None else f"integer in [{minimum}, {maximum}]"
     return parse  # type: ignore[return-value]
 
 
