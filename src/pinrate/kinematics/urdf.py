@@ -88,6 +88,10 @@ def decode_xml(data: bytes, label: str) -> tuple[str, str]:
         ) from None
     except (UnicodeError, ValueError) as error:  # codecs such as punycode raise other errors
         raise LoadError(f"{label}: cannot be read as {encoding!r}, the encoding it declares ({error})") from None
+    try:  # UTF-7 decodes to lone surrogates, which no XML parser (nor Pinocchio) takes
+        text.encode("utf-8")
+    except UnicodeEncodeError as error:
+        raise LoadError(f"{label}: not valid {encoding} text: a lone surrogate at character {error.start}") from None
     return _ANY_DECLARATION.sub("", text, count=1), codecs.lookup(encoding).name
 
 
