@@ -2,7 +2,7 @@
 
 Exit codes: 0 done (the demo converged), 1 the demo did not converge, 2 a refused input
 (one line ``pinrate: error: ...`` on stderr), 130 interrupted (Ctrl-C, at any moment from
-the console script's first line on, :mod:`.console`; when the interrupt landed inside
+the console script's first call on, :mod:`.console`; when the interrupt landed inside
 Pinocchio's import, CPython itself ends the process by SIGINT after pinrate's cleanup, which
 shells also report as 130), 143 terminated (SIGTERM), 141 its output pipe closed (``| head``).
 
