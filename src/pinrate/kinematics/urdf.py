@@ -214,7 +214,10 @@ def robot_from_urdf(
     model = _build_model(text, label)
     geometry_text = text
     if confine:
-        geometry_text, skipped = confine_meshes(text, package_dirs, mesh_roots(package_dirs))
+        try:
+            geometry_text, skipped = confine_meshes(text, package_dirs, mesh_roots(package_dirs))
+        except ValueError as error:
+            raise LoadError(f"{label}: its mesh file names could not be read ({error})") from None
         urdf_path = None  # the geometry is read from the text: every mesh in it checked, by its own path
         if skipped:
             warnings.warn(

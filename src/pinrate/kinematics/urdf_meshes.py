@@ -62,13 +62,14 @@ class _Mesh:
 def confine_meshes(text: str, search_dirs: Sequence[str], roots: Sequence[str]) -> tuple[str, list[str]]:
     """``text`` with each mesh resolved and confined to ``roots`` (see the module docstring), and
     the skipped ones as "URI (reason)". ``search_dirs`` are the ``package://`` folders in the
-    order Pinocchio searches them; ``roots`` come from :func:`mesh_roots`. Text the XML parser
-    refuses is returned as it is (the loader refuses it next)."""
+    order Pinocchio searches them; ``roots`` come from :func:`mesh_roots`. ValueError when the
+    text cannot be read to the byte (the loader has parsed it before: that is not expected, and
+    the robot is then refused rather than its meshes read unchecked)."""
     data = text.encode("utf-8")
     try:
         meshes = _meshes(data)
-    except xml.parsers.expat.ExpatError:
-        return text, []
+    except xml.parsers.expat.ExpatError as error:
+        raise ValueError(str(error)) from None
     edits: list[tuple[int, int, bytes]] = []  # (start, end, replacement)
     skipped: list[str] = []
     for mesh in meshes:
