@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import math
 import os
 import re
@@ -14,7 +15,7 @@ import threading
 import time
 import zipfile
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -435,3 +436,58 @@ def special_files(folder: Path) -> list[tuple[str, Path, str]]:
     if unreadable.exists():
         cases.append(("an unreadable file", unreadable, "cannot be read: Permission denied"))
     return cases
+
+
+IN_OPEN = 0x20
+"""inotify's event: a file (or the folder) was opened."""
+
+
+@contextlib.contextmanager
+def files_opened_in(folder: Path) -> Iterator[list[str]]:
+    """The names of the files in ``folder`` opened during the block, by any code of any process
+    (Python's, or C++ such as Pinocchio's mesh loaders): Linux inotify's IN_OPEN events,
+    filled in when the block ends."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    descriptor = libc.inotify_init1(os.O_NONBLOCK | os.O_CLOEXEC)
+    if descriptor < 0:
+        raise OSError(ctypes.get_errno(), "inotify_init1")
+    names: list[str] = []
+    try:
+        if libc.inotify_add_watch(descriptor, os.fsencode(folder), IN_OPEN) < 0:
+            raise OSError(ctypes.get_errno(), f"inotify_add_watch {folder}")
+        yield names
+        try:
+            events = os.read(descriptor, 1 << 16)
+        except BlockingIOError:
+            events = b""
+        offset = 0
+        while offset < len(events):
+            _, _, _, length = struct.unpack_from("iIII", events, offset)
+            names.append(events[offset + 16 : offset + 16 + length].rstrip(b"\0").decode())
+            offset += 16 + length
+    finally:
+        os.close(descriptor)
+
+
+_OPENED: list[str] | None = None
+"""Where :func:`python_opens` records while a block runs (None: not recording)."""
+
+
+def _record_open(event: str, arguments: tuple[object, ...]) -> None:
+    if event == "open" and _OPENED is not None and isinstance(arguments[0], str | bytes | os.PathLike):
+        _OPENED.append(os.fsdecode(arguments[0]))
+
+
+@contextlib.contextmanager
+def python_opens() -> Iterator[list[str]]:
+    """Every path Python code opens during the block ("open" audit events; a hook cannot be
+    removed, so one hook is added per process and records only inside these blocks)."""
+    global _OPENED
+    if not getattr(sys, "_pinrate_open_hook", False):
+        sys.addaudithook(_record_open)
+        sys._pinrate_open_hook = True  # type: ignore[attr-defined]
+    _OPENED = []
+    try:
+        yield _OPENED
+    finally:
+        _OPENED = None

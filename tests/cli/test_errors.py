@@ -17,8 +17,9 @@ def cases(tmp: Path) -> list[tuple[list[str], str]]:
     out = ["--out", str(tmp / "report")]
     return [
         (["demo", "ur5", "--seed", "-1"], "--seed: must be at least 0"),
-        (["demo", "ur5", "--speed", "0"], "--speed: must be positive"),
-        (["demo", "ur5", "--speed", "-2"], "--speed: must be positive"),
+        (["demo", "ur5", "--speed", "0"], "--speed: must be from 0.001 to 1000"),
+        (["demo", "ur5", "--speed", "-2"], "--speed: must be from 0.001 to 1000"),
+        (["demo", "ur5", "--speed", "1e-300"], "--speed: must be from 0.001 to 1000"),
         (["demo", "ur5", "--targets", "0"], "--targets: must be at least 1"),
         (["demo", "ur5", "--targets", "two"], "--targets: expected an integer"),
         (["demo", "ur5", "--dt", "nan"], "--dt: must be a finite number"),
@@ -27,12 +28,19 @@ def cases(tmp: Path) -> list[tuple[list[str], str]]:
         (["demo", "ur5", "--tol", "1e-20", "--no-viewer"], "tol must be at least 1e-12"),
         (["demo", "ur5", "--max-steps", "-5"], "--max-steps: must be at least 0"),
         (["demo", "ur5", "--max-steps", "2.5"], "--max-steps: expected an integer"),
+        (["demo", "ur5", "--max-steps", "1000001"], "--max-steps: must be at most 1,000,000"),
+        (["demo", "ur5", "--max-steps", "99999999999999999999"], "--max-steps: must be at most 1,000,000"),
         (["demo", "ur5", "--target", "0", "0", "nan", "0", "0", "0"], "--target: must be a finite number"),
         (["demo", "ur5", "--target", "1e9", "0", "0", "0", "0", "0", "--no-viewer"], "physical bound"),
         (["demo", "ur5", "--algorithm", "bogus"], "invalid choice: 'bogus'"),
         (["demo", "ur5", "--record", str(tmp / "missing" / "run.html")], "does not exist"),
         (["demo", "ur5", "--record", str(tmp)], "is a folder"),
         (["demo", "ur5", "--record", str(tmp / "run.html"), "--no-viewer"], "drop --no-viewer"),
+        (["demo", "ur5", "--record", ""], "--record must be a path, got ''"),
+        (["demo", "ur5", "--record", "/proc/pinrate-run.html"], "--record '/proc/pinrate-run.html'"),
+        (["demo", "ur5", "--record", "/sys/pinrate-run.html"], "--record '/sys/pinrate-run.html'"),
+        (["demo", "ur5", "--tip", ""], "--tip must name a frame, got ''"),
+        (["demo", "ur5", "--sensor", " "], "--sensor must name a frame, got ' '"),
         (["demo", "ur5", "--host", "8.8.8.8"], "not an address of this machine"),
         (["demo", "ur5", "--host", "256.1.1.1"], "host '256.1.1.1'"),
         (["demo", "ur5", "--tip", "nosuch"], "no frame 'nosuch'"),
@@ -56,6 +64,10 @@ def cases(tmp: Path) -> list[tuple[list[str], str]]:
         (["analyze", "scara", "--linear", "xq", *out], "unknown letter"),
         (["analyze", "scara", "--joints", "theta1", "theta1", "--samples", "100", *out], "two different joints"),
         (["analyze", "scara", "--sweep", "garbage", *out], "--sweep takes PARAM=LO:HI"),
+        (["analyze", "scara", "--sweep", "", *out], "--sweep takes PARAM=LO:HI"),
+        (["analyze", "scara", "--tip", "", *out], "--tip must name a frame, got ''"),
+        (["analyze", "scara", "--out", str(tmp / "report" / "deeper"), "--arm", "nosuch"], "no moving joint"),
+        (["teleop", "ur55", "--record-dir", str(tmp / "report")], "unknown robot name 'ur55'"),
         (["analyze", "ur5", "--sweep", "l1=0.1:1", *out], "--sweep needs one of the papers' parametric robots"),
         (["analyze", "scara", "--scheduler", "nonsense", "--samples", "100", *out], "scheduler address 'nonsense'"),
         (["nosuch"], "invalid choice: 'nosuch'"),
@@ -83,6 +95,8 @@ def test_a_refused_command_line_is_one_error_line_and_exit_2(
     assert len(lines) == 1 and lines[0].startswith("pinrate: error: "), captured.err
     assert phrase in lines[0]
     assert "Traceback" not in captured.out + captured.err
+    # A refused command leaves no folder it made (--out, --record-dir: tmp/report).
+    assert not (tmp_path / "report").exists()
 
 
 def test_a_refused_report_folder_is_refused_before_the_work(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

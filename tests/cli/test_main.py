@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -81,3 +82,35 @@ def test_version_names_the_backend(monkeypatch: pytest.MonkeyPatch) -> None:
         [sys.executable, "-m", "pinrate.cli", "--version"], capture_output=True, text=True, timeout=60, check=False
     )
     assert "backend: python (PINRATE_BACKEND=python)" in result.stdout
+
+
+def test_many_targets_are_drawn_as_their_segments_start(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # `--targets 1000000000` drew every target before the first segment: nothing printed
+    # while memory grew by 1.1 MB/s. Now each is drawn when its segment starts.
+    from pinrate.cli import demo
+
+    drawn = []
+
+    def nearby_target(*args: object, **kwargs: object) -> object:
+        drawn.append(1)
+        if len(drawn) == 3:
+            raise KeyboardInterrupt  # Ctrl-C as the third segment starts
+        return real(*args, **kwargs)
+
+    real = demo.nearby_target
+    monkeypatch.setattr(demo, "nearby_target", nearby_target)
+    assert main(["demo", "ur5", "--no-viewer", "--targets", "1000000000", "--max-steps", "5"]) == 130
+    out = capsys.readouterr().out
+    assert "segment 2/1000000000" in out and len(drawn) == 3
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs Linux /dev/full")
+def test_a_replay_that_cannot_be_written_is_one_error_line(capsys: pytest.CaptureFixture[str]) -> None:
+    # The place is writable when checked before the run; the write itself fails after it.
+    assert main(["demo", "ur5", "--record", "/dev/full", "--max-steps", "1", "--speed", "1000"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == [
+        "pinrate: error: --record '/dev/full' could not be written: No space left on device"
+    ]

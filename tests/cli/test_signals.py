@@ -5,6 +5,7 @@ traceback, also when SIGINT was inherited ignored; SIGTERM cleans up; a closed p
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -12,6 +13,8 @@ import time
 from collections.abc import Callable
 
 import pytest
+
+from support import ROOT
 
 pytestmark = pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="needs Linux /proc")
 
@@ -118,3 +121,36 @@ def test_a_signal_swallowed_by_a_callback_is_delivered_again(name: str, exceptio
         [sys.executable, "-c", SWALLOWED.replace("{name}", name)], capture_output=True, text=True, timeout=30
     )
     assert result.stdout.strip() == exception and "Traceback" not in result.stderr, result.stderr
+
+
+CONSOLE_SCRIPT = """
+import signal, sys
+
+class Ring:
+    # Sends the signal when the command line's own modules start loading: the moment between
+    # the console script's first line and pinrate's handlers (Ctrl-C a few ms after start).
+    def find_spec(self, name, path=None, target=None):
+        if name == "pinrate.cli.entry":
+            signal.raise_signal(signal.SIG{name})
+        return None
+
+sys.meta_path.insert(0, Ring())
+from {module} import {function} as main
+assert signal.getsignal(signal.SIGINT) is signal.default_int_handler, "importing it took SIGINT"
+sys.argv[1:] = ["list"]
+sys.exit(main())
+"""
+
+
+@pytest.mark.parametrize(("name", "code", "said"), [("INT", 130, "interrupted"), ("TERM", 143, "terminated")])
+def test_a_signal_before_the_command_line_loads_ends_the_console_script_quietly(
+    name: str, code: int, said: str
+) -> None:
+    # The console script as pip writes it, for the entry point pyproject.toml declares.
+    declared = re.search(r'^pinrate = "([\w.]+):(\w+)"', (ROOT / "pyproject.toml").read_text(encoding="utf-8"), re.M)
+    assert declared is not None
+    module, function = declared.groups()
+    script = CONSOLE_SCRIPT.replace("{name}", name).replace("{module}", module).replace("{function}", function)
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60, check=False)
+    assert result.returncode == code and "Traceback" not in result.stderr, result.stderr[-2000:]
+    assert result.stderr.strip() == f"pinrate: {said}" and not result.stdout

@@ -83,6 +83,7 @@ def test_a_subcommand_loads_what_it_needs_only() -> None:
 
 def test_each_choice_copied_into_the_parser_matches_its_source() -> None:
     # The parser keeps copies (importing the sources would load numpy and Pinocchio).
+    from pinrate.control.servo_loop import MAX_STEPS
     from pinrate.control.singularity import STRATEGIES, WRIST_STRATEGIES
     from pinrate.kinematics.urdf_structure import MAX_JOINTS
     from pinrate.solvers.registry import ALGORITHMS
@@ -93,6 +94,7 @@ def test_each_choice_copied_into_the_parser_matches_its_source() -> None:
     assert parser.WRIST_STRATEGIES == WRIST_STRATEGIES
     assert parser.FRAMES == FRAMES
     assert parser.MAX_JOINTS == MAX_JOINTS
+    assert parser.MAX_STEPS == MAX_STEPS
 
 
 @pytest.mark.parametrize("name", SUBCOMMANDS)

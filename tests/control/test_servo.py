@@ -10,6 +10,7 @@ import pytest
 
 import pinrate
 from pinrate import Partition, Status
+from pinrate.control import servo_loop
 from pinrate.kinematics.targets import nearby_target
 
 
@@ -199,7 +200,8 @@ TWO_LINK_CONTINUOUS = """<robot name="reach_two"><link name="a"/><link name="b"/
 @pytest.mark.parametrize(("algorithm", "stall_time"), [("exact", None), ("dls", 0.5), ("exact", 2.0)])
 def test_an_unreachable_target_stalls_whatever_max_steps(tmp_path, algorithm: str, stall_time: float | None) -> None:
     # Continuous joints have no limit to stop at: the arm (reach 2 m) stretches towards a
-    # target 5 m away and stays there. Before the stall rule, max_steps=10**12 ran for ever.
+    # target 5 m away and stays there. Before the stall rule, max_steps=10**12 ran for ever;
+    # now the stall rule ends it well before the largest budget servo takes.
     path = tmp_path / "reach_two.urdf"
     path.write_text(TWO_LINK_CONTINUOUS, encoding="utf-8")
     robot = pinrate.load(path)
@@ -215,7 +217,7 @@ def test_an_unreachable_target_stalls_whatever_max_steps(tmp_path, algorithm: st
         target,
         algorithm=algorithm,
         partition=partition,
-        max_steps=10**12,
+        max_steps=servo_loop.MAX_STEPS,
         stall_time=stall_time,
         singularity="generalized_inverse",
     )
@@ -236,14 +238,21 @@ def test_an_unreachable_target_stalls_whatever_max_steps(tmp_path, algorithm: st
 
 def test_a_tiny_dt_stalls_after_the_step_cap(monkeypatch: pytest.MonkeyPatch) -> None:
     # dt = 1e-9: one second of simulated time would be 1e9 steps; the window is capped.
-    from pinrate.control import servo_loop
-
     monkeypatch.setattr(servo_loop, "STALL_MAX_STEPS", 300)
     scara = pinrate.load("scara")
     target = scara.pose(scara.home())
     target[0, 3] += 0.3
-    trajectory = pinrate.servo(scara, scara.home(), target, dt=1e-9, max_steps=10**9)
+    trajectory = pinrate.servo(scara, scara.home(), target, dt=1e-9, max_steps=servo_loop.MAX_STEPS)
     assert trajectory.status[-1] == "stalled" and trajectory.steps == 300
+
+
+def test_max_steps_is_bounded_as_documented(ur5: pinrate.Robot) -> None:
+    # A run records every step (285-430 bytes on a 6-joint arm): with gain=2e-5 the error was
+    # still improving by 1 % a window after 3 million steps, at 942 MB. The budget is capped.
+    _, target = nearby_target(ur5, Partition.auto(ur5), 0)
+    with pytest.raises(pinrate.InputError, match=r"max_steps must be at most 1,000,000 .*got 1,000,001$"):
+        pinrate.servo(ur5, ur5.home(), target, max_steps=1_000_001)
+    assert servo_loop.MAX_STEPS == 1_000_000
 
 
 def test_bad_q0(ur5: pinrate.Robot) -> None:

@@ -83,7 +83,7 @@ def test_package_dirs_resolve_package_uris_outside_the_urdfs_folders(tmp_path: P
         encoding="utf-8",
     )
     assert pinrate.load(path, package_dirs=[tmp_path / "elsewhere"]).visual_model.ngeoms == 1
-    with pytest.warns(UserWarning, match="visual meshes not loaded"):
+    with pytest.warns(UserWarning, match=r"package://mypkg/meshes/tri.stl \(not found\)"):
         assert pinrate.load(path).visual_model.ngeoms == 0
     with pytest.raises(pinrate.InputError, match="is not a folder"):
         pinrate.load(path, package_dirs=[tmp_path / "missing"])

@@ -153,6 +153,14 @@ def test_undeclared_non_utf8_bytes_are_refused_with_the_offset(tmp_path: Path) -
         pinrate.load(path)
 
 
+def test_a_lone_surrogate_is_refused_not_a_traceback(tmp_path: Path) -> None:
+    # UTF-7 decodes "+2D8-" to a lone surrogate, which ElementTree's encoder raised on.
+    path = tmp_path / "utf7.urdf"
+    path.write_bytes(b'<?xml version="1.0" encoding="utf-7"?>' + robot(*GOOD).replace('"a"', '"a+2D8-"').encode())
+    with pytest.raises(pinrate.LoadError, match="not valid utf-7 text: a lone surrogate at character"):
+        pinrate.load(path)
+
+
 def test_an_unknown_encoding_is_named(tmp_path: Path) -> None:
     path = tmp_path / "klingon.urdf"
     path.write_text('<?xml version="1.0" encoding="klingon-8"?>' + robot(*GOOD), encoding="utf-8")

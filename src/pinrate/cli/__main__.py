@@ -1,7 +1,7 @@
-"""``python -m pinrate.cli``."""
+"""``python -m pinrate.cli``: the console script's entry point (:mod:`.console`)."""
 
 import sys
 
-from .entry import main
+from .console import main
 
 sys.exit(main())

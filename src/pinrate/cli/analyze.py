@@ -7,12 +7,13 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 from .. import analysis, robots
-from ..checks import check_output_folder
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
+from .outputs import output_folder
 from .robot_arguments import load_robot
 
 
@@ -33,12 +34,17 @@ def _partition_from_args(args: argparse.Namespace, robot: Robot) -> Partition:
 
 
 def analyze(args: argparse.Namespace) -> int:
-    """``pinrate analyze``: the convergence report of one robot, written to ``--out``."""
-    out = check_output_folder(args.out, "--out")  # before the long part of the work
+    """``pinrate analyze``: the convergence report of one robot, written to ``--out`` (made
+    before the long part of the work, and removed again if the command ends without a report)."""
+    with output_folder(args.out, "--out") as out:
+        return _analyze(args, out)
+
+
+def _analyze(args: argparse.Namespace, out: Path) -> int:
     robot = load_robot(args)
     partition = _partition_from_args(args, robot)
     factory = None
-    if args.sweep:  # checked before the long part of the work
+    if args.sweep is not None:  # checked before the long part of the work ('' too)
         parameter, low, high = analysis.parse_sweep(args.sweep)
         if args.robot not in robots.ROBOT_NAMES:
             raise InputError(

@@ -18,8 +18,8 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"pinrate: error: {where}{message} (see `{self.prog} --help`)\n")
 
 
-def count(minimum: int) -> type[int]:
-    """An argparse type: an integer >= ``minimum``."""
+def count(minimum: int, maximum: int | None = None) -> type[int]:
+    """An argparse type: an integer >= ``minimum`` (and <= ``maximum``)."""
 
     def parse(text: str) -> int:
         try:
@@ -28,9 +28,11 @@ def count(minimum: int) -> type[int]:
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be at least {minimum}, got {value}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(f"must be at most {maximum:,}, got {value:,}")
         return value
 
-    parse.__name__ = f"integer >= {minimum}"
+    parse.__name__ = f"integer >= {minimum}" if maximum is None else f"integer in [{minimum}, {maximum}]"
     return parse  # type: ignore[return-value]
 
 
@@ -40,6 +42,19 @@ def positive(text: str) -> float:
     if value <= 0:
         raise argparse.ArgumentTypeError(f"must be positive, got {text}")
     return value
+
+
+def within(low: float, high: float) -> type[float]:
+    """An argparse type: a number in [``low``, ``high``]."""
+
+    def parse(text: str) -> float:
+        value = finite(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be from {low:g} to {high:g}, got {text}")
+        return value
+
+    parse.__name__ = f"number in [{low:g}, {high:g}]"
+    return parse  # type: ignore[return-value]
 
 
 def finite(text: str) -> float:

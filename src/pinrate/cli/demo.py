@@ -9,9 +9,15 @@ arguments are parsed (meshcat only when a view is asked for).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import itertools
+import os
 import sys
 import time
 import warnings
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -27,6 +33,9 @@ from ..solvers.error_map import THEOREM_ALGORITHMS
 from ..theorem.pointwise import coupling_along
 from .arguments import warn
 from .robot_arguments import load_robot, start_configuration
+
+if TYPE_CHECKING:
+    from ..viewer import Viewer
 
 
 def radius_range(trajectory: Trajectory) -> str:
@@ -111,23 +120,62 @@ def status_line(index: int, count: int, trajectory: Trajectory) -> str:
     )
 
 
-def _targets(args: argparse.Namespace, robot: Robot, partition: Partition, start: np.ndarray) -> list[np.ndarray]:
+FRAMED_TARGETS = 20
+"""The viewer's opening view frames the robot and at most this many of the first targets."""
+
+
+def _targets(args: argparse.Namespace, robot: Robot, partition: Partition, start: np.ndarray) -> Iterator[np.ndarray]:
+    """The targets, each drawn when its segment starts: ``--targets`` may be any count (the
+    run then goes on until Ctrl-C), and the first segment starts at once."""
     if args.target is not None:
         x, y, z, roll, pitch, yaw = args.target
-        return [pin.SE3(pin.rpy.rpyToMatrix(roll, pitch, yaw), np.array([x, y, z])).homogeneous]
-    return [nearby_target(robot, partition, args.seed + k, start=start)[1] for k in range(args.targets)]
+        yield pin.SE3(pin.rpy.rpyToMatrix(roll, pitch, yaw), np.array([x, y, z])).homogeneous
+        return
+    for k in range(args.targets):
+        yield nearby_target(robot, partition, args.seed + k, start=start)[1]
+
+
+def _record_file(path: str) -> tuple[Path, bool]:
+    """``--record``, checked before the run: the checks of :func:`~pinrate.checks.check_output_file`,
+    then the file is opened for writing (and removed again if this made it), so a place the
+    system refuses (``/proc``, ``/sys``, a read-only mount) is refused now rather than after
+    the whole run. Returns the path and whether the file existed."""
+    target = check_output_file(path, "--record")
+    existed = os.path.lexists(target)
+    flags = os.O_WRONLY | os.O_NONBLOCK | (0 if existed else os.O_CREAT | os.O_EXCL)  # never truncated here
+    try:
+        os.close(os.open(target, flags, 0o644))
+    except OSError as error:
+        raise InputError(f"--record {str(target)!r} cannot be written: {error.strerror or error}") from None
+    if not existed:
+        with contextlib.suppress(OSError):
+            target.unlink()
+    return target, existed
+
+
+def _save_record(viewer: Viewer, target: Path, existed: bool) -> None:
+    """The replay written to ``--record``; a write that fails (a full disk, ``/dev/full``) is
+    one error line, and a partial file this run made is removed."""
+    try:
+        print(f"recorded   {viewer.save_html(target)} ({viewer.recorded_frames} frames)")
+    except OSError as error:
+        if not existed and target.is_file():
+            with contextlib.suppress(OSError):
+                target.unlink()
+        raise InputError(f"--record {str(target)!r} could not be written: {error.strerror or error}") from None
 
 
 def demo(args: argparse.Namespace) -> int:
     """``pinrate demo``: 0 when every target was reached, 1 otherwise."""
     record = None
-    if args.record:
+    if args.record is not None:  # '' too: check_output_file refuses it by name
         if args.no_viewer:
             raise InputError("--record writes the viewer's replay: drop --no-viewer")
-        record = check_output_file(args.record, "--record")
+        record = _record_file(args.record)
     robot = load_robot(args)
     partition = Partition.auto(robot)
     start = robot.home() if args.q0 is None else start_configuration(robot, args.q0)
+    count = 1 if args.target is not None else args.targets
     targets = _targets(args, robot, partition, start)
     viewer = None
     if not args.no_viewer:
@@ -142,8 +190,10 @@ def demo(args: argparse.Namespace) -> int:
     try:
         q = start
         if viewer is not None:
-            viewer.frame(q, np.array([target[:3, 3] for target in targets]))
+            framed = list(itertools.islice(targets, FRAMED_TARGETS))
+            viewer.frame(q, np.array([target[:3, 3] for target in framed]))
             viewer.show(q)
+            targets = itertools.chain(framed, targets)
         all_converged = True
         for index, target in enumerate(targets, start=1):
             trajectory = servo(
@@ -162,19 +212,19 @@ def demo(args: argparse.Namespace) -> int:
                 f"target     xyz {np.array2string(position, precision=4)} m   "
                 f"rpy {np.array2string(rpy, precision=4)} rad (world)"
             )
-            if len(targets) == 1 and viewer is None:
+            if count == 1 and viewer is None:
                 print(summary(robot, trajectory))
             else:
                 if index == 1:
                     print("partition  " + partition.describe(robot).replace("\n", "\n           "))
-                print(status_line(index, len(targets), trajectory), flush=True)
+                print(status_line(index, count, trajectory), flush=True)
             if viewer is not None:
                 viewer.play(trajectory, target=target, speed=args.speed)
             all_converged &= trajectory.converged
             q = trajectory.q[-1]
         if viewer is not None:
             if record is not None:
-                print(f"recorded   {viewer.save_html(record)} ({viewer.recorded_frames} frames)")
+                _save_record(viewer, *record)
             if sys.stdin.isatty() and sys.stdout.isatty():
                 print("The view stays up: Ctrl-C to quit.", flush=True)
                 try:

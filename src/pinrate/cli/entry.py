@@ -1,10 +1,10 @@
 """The ``pinrate`` process: who owns its signals, how it ends, what it exits with.
 
 Exit codes: 0 done (the demo converged), 1 the demo did not converge, 2 a refused input
-(one line ``pinrate: error: ...`` on stderr), 130 interrupted (Ctrl-C, at any moment,
-start-up included; when the interrupt landed inside Pinocchio's import, CPython itself ends
-the process by SIGINT after pinrate's cleanup, which shells also report as 130), 143
-terminated (SIGTERM), 141 its output pipe closed (``| head``).
+(one line ``pinrate: error: ...`` on stderr), 130 interrupted (Ctrl-C, at any moment from
+the console script's first call on, :mod:`.console`; when the interrupt landed inside
+Pinocchio's import, CPython itself ends the process by SIGINT after pinrate's cleanup, which
+shells also report as 130), 143 terminated (SIGTERM), 141 its output pipe closed (``| head``).
 
 The CLI owns SIGINT: CPython raises KeyboardInterrupt only when SIGINT was at its default
 disposition at start-up, and a background job of a non-interactive shell inherits it
@@ -93,8 +93,21 @@ class _Signals:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (see the module docstring)."""
+    return _run(argv, ())
+
+
+def run_console(arrived: Sequence[int]) -> int:
+    """:func:`main` on ``sys.argv``, for the console script (:mod:`.console`): ``arrived`` holds
+    the signals its recorders caught before pinrate's own handlers were installed, the first of
+    which ends the run at once (130 or 143)."""
+    return _run(None, arrived)
+
+
+def _run(argv: Sequence[str] | None, arrived: Sequence[int]) -> int:
     previous = _own_signals()
     try:
+        if arrived:  # read once pinrate's handlers are in place: no signal falls between
+            raise _Signals.exception(arrived[0])
         try:
             args = build_parser(_version).parse_args(argv)  # light: --help answers here
         except SystemExit as finished:  # --help, --version, or a usage error already printed on one line

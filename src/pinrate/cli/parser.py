@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from .arguments import Parser, count, finite, positive
+from .arguments import Parser, count, finite, positive, within
 
 ALGORITHMS = ("exact", "schur", "mca1", "mca2", "mca3", "dls")
 """A copy of :data:`pinrate.solvers.registry.ALGORITHMS`."""
@@ -29,6 +29,13 @@ FRAMES = ("hand", "base")
 
 MAX_JOINTS = 100
 """A copy of :data:`pinrate.kinematics.urdf_structure.MAX_JOINTS` (for the help text only)."""
+
+MAX_STEPS = 1_000_000
+"""A copy of :data:`pinrate.control.servo_loop.MAX_STEPS` (``demo --max-steps``' bound)."""
+
+SPEEDS = (1e-3, 1e3)
+"""The viewer's playback speeds ``demo --speed`` accepts (× real time): a segment's frames are
+slept through at this rate, and 1e-300 would ask for a sleep no clock can count."""
 
 DEMO_MAX_STEPS = 6000
 """The demo's step budget (60 s at dt = 0.01): MCA1 with ρ near 0.8 (TIAGo's arm) needs about
@@ -119,10 +126,20 @@ def _demo(demo: argparse.ArgumentParser) -> None:
     demo.add_argument("--seed", type=count(0), default=0, help="seed of the default random target (>= 0)")
     demo.add_argument("--dt", type=positive, default=0.01, help="control period in seconds")
     demo.add_argument("--gain", type=positive, default=1.0, help="twist per unit pose error (1/s)")
-    demo.add_argument("--max-steps", type=count(0), default=DEMO_MAX_STEPS)
+    demo.add_argument(
+        "--max-steps",
+        type=count(0, MAX_STEPS),
+        default=DEMO_MAX_STEPS,
+        help=f"the step budget of each segment (at most {MAX_STEPS:,}: a run records every step)",
+    )
     demo.add_argument("--tol", type=positive, default=1e-4, help="convergence tolerance (m and rad)")
     demo.add_argument("--targets", type=count(1), default=1, help="number of random targets, one after the other")
-    demo.add_argument("--speed", type=positive, default=1.0, help="playback speed in the viewer (x real time)")
+    demo.add_argument(
+        "--speed",
+        type=within(*SPEEDS),
+        default=1.0,
+        help=f"playback speed in the viewer (x real time, {SPEEDS[0]:g} to {SPEEDS[1]:g})",
+    )
     demo.add_argument("--open", action="store_true", help="open the viewer in the default browser")
     demo.add_argument("--record", metavar="HTML", help="write a standalone HTML replay of the whole run")
     demo.add_argument(

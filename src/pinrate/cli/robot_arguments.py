@@ -20,6 +20,9 @@ from ..robots import load
 
 def load_robot(args: argparse.Namespace) -> Robot:
     """The robot of ``args.robot``, ``--tip``, ``--sensor`` and ``--max-joints``; says which tip it chose."""
+    for option, frame in (("--tip", args.tip), ("--sensor", args.sensor)):
+        if frame is not None and not frame.strip():
+            raise InputError(f"{option} must name a frame, got {frame!r}")
     robot = load(args.robot, tip=args.tip, sensor=args.sensor, max_joints=args.max_joints)
     if robot.tip_choice != "given":
         print(f"tip        {robot.tip} ({robot.tip_choice}; --tip to choose another)")

@@ -8,10 +8,10 @@ import contextlib
 import warnings
 import webbrowser
 
-from ..checks import check_output_folder
 from ..errors import InputError
 from ..teleop import Teleop
 from .arguments import warn
+from .outputs import output_folder
 from .robot_arguments import load_robot, start_configuration
 
 MAX_RATE = 5000.0
@@ -20,13 +20,18 @@ MAX_RATE = 5000.0
 
 def run(args: argparse.Namespace) -> int:
     """``pinrate teleop``: serve the console until Ctrl-C; the recorded runs are listed at the end."""
-    from ..teleop.server import TeleopServer, check_host  # meshcat and tornado only for a console
-
     if args.rate > MAX_RATE:
         raise InputError(f"--rate must be at most {MAX_RATE:g} Hz, got {args.rate:g}")
     if args.port > 65535:
         raise InputError(f"--port must be at most 65535, got {args.port}")
-    check_output_folder(args.record_dir, "record folder")  # refused before the robot loads
+    # Made before the robot loads, and removed again if the command is refused before it serves.
+    with output_folder(args.record_dir, "record folder"):
+        return _serve(args)
+
+
+def _serve(args: argparse.Namespace) -> int:
+    from ..teleop.server import TeleopServer, check_host  # meshcat and tornado only for a console
+
     with warnings.catch_warnings():  # the server warns about a shared address, once
         warnings.simplefilter("ignore", UserWarning)
         check_host(args.host)

@@ -29,12 +29,14 @@ norms ``tol`` applies to):
   time constants of the first-order error decay e(t) = e0 exp(-gain t) that an exact solver
   gives), or for STALL_MAX_STEPS steps, whichever is fewer. Every continuing window improves
   e by 1 %, and e cannot fall below ``tol`` without converging, so a run ends after at most
-  ln(e0 / tol) / ln(1 / 0.99) windows whatever ``max_steps`` is.
+  ln(e0 / tol) / ln(1 / 0.99) windows. That bounds a run, not usefully: an error that
+  improves slowly (``gain=2e-5``) goes on for tens of millions of steps.
 - **singular**: the step halted for a singularity (``singularity="decelerate"``: the next
   step would have made a block singular; or the algorithm met a singular block).
 - **collision**: the step halted before two links would come within the collision monitor's
   stop distance (``Controller(collision=True)``).
-- **max steps**: ``max_steps`` ran out.
+- **max steps**: ``max_steps`` ran out. ``max_steps`` is at most MAX_STEPS (one million; an
+  InputError names it beyond): the run records every step, so this bounds its memory.
 
 A joint limit does not stop the run: the step holds the joint on its limit while the others
 go on serving the error (a target the held joint was needed for then ends as "stalled").
@@ -69,6 +71,14 @@ STALL_MAX_STEPS = 100_000
 than this to fall 1 % is not progressing at a useful rate (and a tiny dt would otherwise
 make the window, and the run, endless in wall-clock time)."""
 
+
+MAX_STEPS = 1_000_000
+"""Most steps one servo run may take (``max_steps`` beyond it is an InputError), which bounds its
+memory: a run records every step (q, joint rates, error norms, ρ, status; the run's arrays and
+the Trajectory's copies), about 16 (nq + nv) + 100 bytes a step, and 150 more for a step taken
+on Python. Measured on a 6-joint arm: 285 bytes a step compiled, 430 on Python, so at most
+0.3-0.45 GB (a 100-joint model: about 3.5 GB). At dt = 0.01 a million steps is 2.8 hours of
+motion; servo again from ``trajectory.q[-1]`` for more."""
 
 MIN_TOL = 1e-12
 """Smallest ``tol`` (m and rad): finer than double precision resolves a pose of a 1 m arm."""
@@ -119,8 +129,9 @@ def servo(
     both below ``tol`` (converged), or with a reason (see the module's stop rules): the error
     grew past DIVERGENCE_FACTOR times its best (diverging), it has not improved by
     STALL_IMPROVEMENT for ``stall_time`` seconds (stalled; default max(1 s, 5 / gain)), a
-    step halted for a singularity, or ``max_steps`` ran out. Joints are held at their position
-    limits while the others go on (:class:`Controller`). ``velocity_limits``, ``singularity``
+    step halted for a singularity, or ``max_steps`` ran out (at most MAX_STEPS, a million: the
+    run records every step, 285-430 bytes each for a 6-joint arm). Joints are held at their
+    position limits while the others go on (:class:`Controller`). ``velocity_limits``, ``singularity``
     and ``wrist`` as for :class:`Controller`: the default velocity limits, none, keep the
     papers' simulations as they were; None takes the URDF's.
 
@@ -160,6 +171,11 @@ def servo(
     if tol < MIN_TOL:
         raise InputError(f"tol must be at least {MIN_TOL:g} (m and rad), got {tol!r}")
     max_steps = check_count(max_steps, "max_steps")
+    if max_steps > MAX_STEPS:
+        raise InputError(
+            f"max_steps must be at most {MAX_STEPS:,} (a run records every step: servo again from "
+            f"trajectory.q[-1] for a longer one), got {max_steps:,}"
+        )
     if stall_time is None:
         stall_time = max(1.0, STALL_TIME_CONSTANTS / goal.gain)
     stall_steps = min(math.ceil(check_positive(stall_time, "stall_time") / controller.dt), STALL_MAX_STEPS)
@@ -174,6 +190,7 @@ def servo(
 
 __all__ = [
     "DIVERGENCE_FACTOR",
+    "MAX_STEPS",
     "MIN_TOL",
     "STALL_IMPROVEMENT",
     "STALL_MAX_STEPS",

@@ -28,6 +28,7 @@ from ..errors import LoadError
 from .home import find_home, srdf_states
 from .manipulator import Robot, RobotSpec
 from .partition import Partition
+from .urdf_meshes import confine_meshes, mesh_roots
 from .urdf_structure import check_structure, max_joints_default
 
 # ---------------------------------------------------------------------- loading
@@ -87,6 +88,10 @@ def decode_xml(data: bytes, label: str) -> tuple[str, str]:
         ) from None
     except (UnicodeError, ValueError) as error:  # codecs such as punycode raise other errors
         raise LoadError(f"{label}: cannot be read as {encoding!r}, the encoding it declares ({error})") from None
+    try:  # UTF-7 decodes to lone surrogates, which no XML parser (nor Pinocchio) takes
+        text.encode("utf-8")
+    except UnicodeEncodeError as error:
+        raise LoadError(f"{label}: not valid {encoding} text: a lone surrogate at character {error.start}") from None
     return _ANY_DECLARATION.sub("", text, count=1), codecs.lookup(encoding).name
 
 
@@ -193,16 +198,33 @@ def robot_from_urdf(
     name: str | None = None,
     max_joints: int | None = None,
     search_home: bool = False,
+    confine: bool = False,
 ) -> Robot:
     """A Robot from URDF text: the common path of every way of loading.
 
     ``max_joints`` bounds the moving joints (default :func:`.urdf_structure.max_joints_default`).
     ``search_home``: a URDF without a curated home gets a well-conditioned one
     (:func:`.home.find_home`: the SRDF's ``home`` group_state, else its first, else a search).
+    ``confine``: every mesh is resolved now in ``package_dirs`` (in that order) and kept only
+    when its file lies inside one of them (:mod:`.urdf_meshes`); the others are left out, named
+    in one warning, and the robot's geometry comes from the text with the kept files' paths.
     """
     limit = max_joints_default() if max_joints is None else check_count(max_joints, "max_joints", minimum=1)
     root = _check_urdf_text(text, label, limit)
     model = _build_model(text, label)
+    geometry_text = text
+    if confine:
+        try:
+            geometry_text, skipped = confine_meshes(text, package_dirs, mesh_roots(package_dirs))
+        except ValueError as error:
+            raise LoadError(f"{label}: its mesh file names could not be read ({error})") from None
+        urdf_path = None  # the geometry is read from the text: every mesh in it checked, by its own path
+        if skipped:
+            warnings.warn(
+                f"{label}: {len(skipped)} mesh{'es' if len(skipped) > 1 else ''} left out (the robot loads "
+                f"without {'them' if len(skipped) > 1 else 'it'}): {'; '.join(skipped)}",
+                stacklevel=3,
+            )
     references: dict[str, np.ndarray] = {}
     if srdf_path is not None and srdf_path.is_file():
         try:
@@ -227,7 +249,7 @@ def robot_from_urdf(
         sensor=sensor,
         name=robot_name,
         urdf_path=urdf_path,
-        urdf_text=text,
+        urdf_text=geometry_text,
         package_dirs=package_dirs,
         reference_configurations=references,
         mimic=mimic_joints(root),

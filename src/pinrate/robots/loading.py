@@ -10,6 +10,7 @@ from ..checks import check_count
 from ..errors import InputError, LoadError, choices_hint
 from ..kinematics.manipulator import Robot
 from ..kinematics.urdf import read_urdf, robot_from_urdf
+from ..kinematics.urdf_meshes import ros_package_dirs
 from . import parametric
 from .catalog import EXAMPLE_ROBOTS, CatalogEntry, example_robot_data_share, example_robot_path
 
@@ -42,15 +43,23 @@ def load(
             ``PINRATE_MAX_JOINTS`` environment variable): Pinocchio's data grows with the
             cube of the joint count.
         package_dirs: more folders for ``package://`` mesh URIs, searched before the
-            defaults (the URDF's ancestors and example-robot-data).
+            defaults (the URDF's folder and three of its ancestors, example-robot-data, then
+            ROS_PACKAGE_PATH's and AMENT_PREFIX_PATH's, as Pinocchio adds them). A mesh is read
+            only from inside these folders (the filesystem's root excepted), once ``..`` and
+            symbolic links are resolved; any other mesh is left out with a warning naming it
+            (:mod:`pinrate.kinematics.urdf_meshes`).
 
     Raises:
         LoadError: missing file, malformed XML, not a URDF, a ``.xacro``, a structure fault
             (named joint or link), too many joints, no moving joint, unknown robot name.
         FrameError: unknown tip or sensor frame (the message lists the frames).
+        InputError: a tip or sensor that is not a name ("" is not the default: None is).
     """
     if max_joints is not None:
         check_count(max_joints, "max_joints", minimum=1)
+    for role, frame in (("tip", tip), ("sensor", sensor)):
+        if frame is not None and not (isinstance(frame, str) and frame.strip()):
+            raise InputError(f"{role} must name a frame (or be None for the default), got {frame!r}")
     if isinstance(source, os.PathLike) or (isinstance(source, str) and _looks_like_path(source)):
         try:
             path = Path(source).expanduser().resolve()
@@ -64,10 +73,11 @@ def load(
             sensor=sensor,
             # urdfdom reads files as UTF-8: the visuals of a file in another encoding come from the text
             urdf_path=path if encoding in ("utf-8", "ascii") else None,
-            package_dirs=[*_checked_dirs(package_dirs), *_package_dirs_for(path)],
+            package_dirs=[*_checked_dirs(package_dirs), *_package_dirs_for(path), *ros_package_dirs()],
             max_joints=max_joints,
             srdf_path=path.with_suffix(".srdf"),
             search_home=True,
+            confine=True,
         )
     if not isinstance(source, str):
         raise InputError(f"source must be a URDF path or a robot name, not {type(source).__name__}")
@@ -115,9 +125,10 @@ def _load_example_robot(entry: CatalogEntry, *, tip: str | None, sensor: str | N
         tip=tip or entry.tip,
         sensor=sensor,
         urdf_path=path,
-        package_dirs=[str(share)] if share else [],
+        package_dirs=[*([str(share)] if share else []), *ros_package_dirs()],
         srdf_path=srdf,
         home=entry.home,
         home_values=entry.home_values,
         name=entry.name,
+        confine=True,
     )

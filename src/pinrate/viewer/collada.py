@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import copy
 import functools
+import os
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 
@@ -31,6 +33,37 @@ from ..errors import InputError
 
 PRIMITIVES = ("triangles", "polylist", "lines", "linestrips")
 """The primitive elements three.js's ColladaLoader (r129, meshcat 0.3.2) builds meshes from."""
+
+
+COLLADA_1_4 = "http://www.collada.org/2005/11/COLLADASchema"
+"""The namespace in which Pinocchio's DaeMeshGeometry looks for a file's textures."""
+
+
+def outside_textures(path: str) -> list[str]:
+    """The textures of the Collada file at ``path`` that Pinocchio's DaeMeshGeometry would read
+    (the ``init_from`` paths of its first Collada 1.4 ``<library_images>``, relative to the
+    file's folder) and that lie outside that folder once ``..`` and symbolic links are
+    resolved: the viewer draws such a file not at all rather than read them (their bytes would
+    go into the scene, and into every replay written from it)."""
+    data = Path(path).read_bytes()
+    if b"library_images" not in data:
+        return []
+    try:
+        images = ET.fromstring(data).find(f"{{{COLLADA_1_4}}}library_images")
+    except ET.ParseError:  # DaeMeshGeometry's own parse fails first: it reads nothing more
+        return []
+    if images is None:
+        return []
+    folder = os.path.dirname(path)
+    real_folder = os.path.realpath(folder)
+    names = [element.text for element in images.iter() if "init_from" in element.tag and element.text]
+    return [
+        name
+        for name in names
+        if not os.path.realpath(os.path.join(folder, name)).startswith(
+            real_folder + os.sep
+        )  # join keeps an absolute name
+    ]
 
 
 def _namespace(root: ET.Element) -> str:

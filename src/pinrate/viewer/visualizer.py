@@ -10,7 +10,7 @@ import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
 from ..errors import InputError
-from .collada import one_material_per_mesh
+from .collada import one_material_per_mesh, outside_textures
 
 
 class _SendCount:
@@ -30,7 +30,10 @@ class RobotVisualizer(MeshcatVisualizer):
 
     * Collada meshes are sent as :func:`~.collada.one_material_per_mesh` rewrites them:
       meshcat 0.3.2's viewer skips the parts of a multi-material ``<mesh>`` (the module's
-      docstring says why).
+      docstring says why). One whose textures lie outside its folder is not drawn
+      (:func:`~.collada.outside_textures`; a warning names them): Pinocchio would read them
+      into the scene. The mesh files themselves are confined when the robot loads
+      (:mod:`pinrate.kinematics.urdf_meshes`).
     * The names of the geometries it actually sent are kept in :attr:`drawn` (Pinocchio
       only warns about the others), so the viewer can draw the skeleton where a link has none.
 
@@ -45,6 +48,11 @@ class RobotVisualizer(MeshcatVisualizer):
         self.drawn: set[str] = set()
 
     def loadMeshFromFile(self, geometry_object: pin.GeometryObject) -> object:
+        path = geometry_object.meshPath
+        if path.lower().endswith(".dae"):
+            outside = outside_textures(path)
+            if outside:  # Pinocchio reports it as a geometry it could not load, and goes on
+                raise InputError(f"{path}: not drawn: its textures lie outside its folder: {', '.join(outside)}")
         mesh = super().loadMeshFromFile(geometry_object)
         text = getattr(mesh, "dae_raw", None)  # Pinocchio's DaeMeshGeometry: the file's text
         if isinstance(text, str):
