@@ -62,7 +62,7 @@ class Report:
             return []
         lines = ["**Why ρ < 1 nowhere:**", ""]
         if np.all(~np.isfinite(radii)):
-            lines += [f"- {line}" for line in singular_blocks(self.robot, self.partition, self.sample.q)]
+            lines += [f"- {line}" for line in _singular_blocks(self.robot, self.partition, self.sample.q)]
         elif np.all(radii == 1.0):
             lines.append(
                 "- the error map has an eigenvalue 1 at every sampled configuration: some direction is never "
@@ -167,7 +167,7 @@ SINGULAR_PROBES = 5
 """Sampled configurations examined to say why a block is singular everywhere."""
 
 
-def singular_blocks(robot: Robot, partition: Partition, configurations: np.ndarray) -> list[str]:
+def _singular_blocks(robot: Robot, partition: Partition, configurations: np.ndarray) -> list[str]:
     """For square blocks A and W singular at every one of the first configurations: the rank
     each has there, and which joints and rows it relates."""
     index = partition.resolve(robot)

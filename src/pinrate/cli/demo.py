@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from ..viewer import Viewer
 
 
-def radius_range(trajectory: Trajectory) -> str:
+def _radius_range(trajectory: Trajectory) -> str:
     """'min .. max' of ρ along a run, and whether a block was singular somewhere."""
     finite = trajectory.spectral_radius[np.isfinite(trajectory.spectral_radius)]
     text = f"{finite.min():.3f} .. {finite.max():.3f}" if finite.size else "undefined"
@@ -56,7 +56,7 @@ explained by it (eq. 30)."""
 def verdict_lines(robot: Robot, trajectory: Trajectory) -> list[str]:
     """ρ along the run, what it rests on, and the coupling beside it (issue 10: ρ < 1 along a
     path is not sufficient; MCA1's term −U A⁻¹ v of eq. 30 can grow without bound)."""
-    radius = radius_range(trajectory)
+    radius = _radius_range(trajectory)
     algorithm = trajectory.algorithm
     if algorithm not in THEOREM_ALGORITHMS:
         return [
@@ -109,9 +109,9 @@ def summary(robot: Robot, trajectory: Trajectory) -> str:
     return "\n".join(lines)
 
 
-def status_line(index: int, count: int, trajectory: Trajectory) -> str:
+def _status_line(index: int, count: int, trajectory: Trajectory) -> str:
     """One console line per servo segment."""
-    radius = radius_range(trajectory)
+    radius = _radius_range(trajectory)
     return (
         f"segment {index}/{count}  {trajectory.algorithm}  {trajectory.steps} steps  "
         f"{'converged' if trajectory.converged else 'NOT converged'}  "
@@ -135,13 +135,15 @@ def _targets(args: argparse.Namespace, robot: Robot, partition: Partition, start
         yield nearby_target(robot, partition, args.seed + k, start=start)[1]
 
 
-def _record_file(path: str) -> tuple[Path, bool]:
+def _record_file(path: str) -> Path:
     """``--record``, checked before the run: the checks of :func:`~pinrate.checks.check_output_file`,
     then the file is opened for writing (and removed again if this made it), so a place the
     system refuses (``/proc``, ``/sys``, a read-only mount) is refused now rather than after
-    the whole run. Returns the path and whether the file existed."""
+    the whole run; an existing target must be a regular file. Returns the path."""
     target = check_output_file(path, "--record")
     existed = os.path.lexists(target)
+    if existed and not target.is_file():  # the replay replaces a file whole: never a device or a FIFO
+        raise InputError(f"--record {str(target)!r} exists and is not a regular file")
     flags = os.O_WRONLY | os.O_NONBLOCK | (0 if existed else os.O_CREAT | os.O_EXCL)  # never truncated here
     try:
         os.close(os.open(target, flags, 0o644))
@@ -150,19 +152,13 @@ def _record_file(path: str) -> tuple[Path, bool]:
     if not existed:
         with contextlib.suppress(OSError):
             target.unlink()
-    return target, existed
+    return target
 
 
-def _save_record(viewer: Viewer, target: Path, existed: bool) -> None:
-    """The replay written to ``--record``; a write that fails (a full disk, ``/dev/full``) is
-    one error line, and a partial file this run made is removed."""
-    try:
-        print(f"recorded   {viewer.save_html(target)} ({viewer.recorded_frames} frames)")
-    except OSError as error:
-        if not existed and target.is_file():
-            with contextlib.suppress(OSError):
-                target.unlink()
-        raise InputError(f"--record {str(target)!r} could not be written: {error.strerror or error}") from None
+def _save_record(viewer: Viewer, target: Path) -> None:
+    """The replay written to ``--record``, whole or not at all (:func:`~pinrate.files.replace_file`:
+    a write that fails, a full disk, leaves no partial file and is one error line)."""
+    print(f"recorded   {viewer.save_html(target)} ({viewer.recorded_frames} frames)")
 
 
 def demo(args: argparse.Namespace) -> int:
@@ -217,14 +213,14 @@ def demo(args: argparse.Namespace) -> int:
             else:
                 if index == 1:
                     print("partition  " + partition.describe(robot).replace("\n", "\n           "))
-                print(status_line(index, count, trajectory), flush=True)
+                print(_status_line(index, count, trajectory), flush=True)
             if viewer is not None:
                 viewer.play(trajectory, target=target, speed=args.speed)
             all_converged &= trajectory.converged
             q = trajectory.q[-1]
         if viewer is not None:
             if record is not None:
-                _save_record(viewer, *record)
+                _save_record(viewer, record)
             if sys.stdin.isatty() and sys.stdout.isatty():
                 print("The view stays up: Ctrl-C to quit.", flush=True)
                 try:

@@ -111,7 +111,7 @@ class ServoSettings:
     pinv_rcond: float = PINV_RCOND
 
 
-def field_disagreements(core: ModuleType) -> list[str]:
+def _field_disagreements(core: ModuleType) -> list[str]:
     """Where ``pinrate_core.Settings``' fields and :class:`ServoSettings`' differ: each field
     missing on one side, named."""
     settings = getattr(core, "Settings", None)
@@ -161,4 +161,4 @@ def disagreements(core: ModuleType) -> list[str]:
         if not _same(name, theirs, ours):
             shown = sorted(ours) if isinstance(ours, frozenset) else ours
             found.append(f"{name} is {theirs!r} in pinrate_core but {shown!r} in pinrate")
-    return found + field_disagreements(core)
+    return found + _field_disagreements(core)

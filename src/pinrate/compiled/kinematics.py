@@ -26,7 +26,7 @@ _UNALIGNED = ("JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnalign
 _cache: weakref.WeakKeyDictionary[Robot, Any] = weakref.WeakKeyDictionary()
 
 
-def joint_arrays(robot: Robot) -> tuple[list[str], list[int], np.ndarray, np.ndarray]:
+def _joint_arrays(robot: Robot) -> tuple[list[str], list[int], np.ndarray, np.ndarray]:
     """(kinds, parents, axes (nj, 3), placements (nj, 4, 4)) of the joints 1.. of the model.
 
     Raises:
@@ -72,7 +72,7 @@ def core_kinematics(robot: Robot) -> Any:
         return None
     kinematics = _cache.get(robot)
     if kinematics is None:
-        kinds, parents, axes, placements = joint_arrays(robot)
+        kinds, parents, axes, placements = _joint_arrays(robot)
         frames = robot.model.frames
         tip, sensor = frames[robot.tip_id], frames[robot.sensor_id]
         kinematics = core.Kinematics(

@@ -11,7 +11,7 @@ here).
 Each mesh is replaced by its convex hull, once, when the monitor is built: coal computes it
 with qhull (``buildConvexHull``, about 1 ms a mesh on the UR5 and the panda). The hull
 contains the mesh, so two links' hulls are never farther apart than their meshes, and the
-monitor never reads a pair farther apart than its meshes are: d <= d_mesh + ε (1 + |d|), ε
+monitor never reads a pair farther apart than its meshes are: d <= d_mesh + ε (1 + abs(d)), ε
 the DistanceRequest's ``gjk_tolerance`` (1e-6 by default), because coal stops GJK once the
 distance it returns exceeds its lower bound on the hulls' distance by at most ε (1 + d).
 Overlapping hulls read d < 0 (EPA's depth). A mesh qhull cannot hull (under 4 vertices,

@@ -104,7 +104,7 @@ class Elbow:
         return self.reach / (upper_arm * self.forearm * math.sin(min(region, math.pi / 2)))
 
 
-def upper_arm_frame(
+def _upper_arm_frame(
     shoulder_origin: np.ndarray, shoulder_axis: np.ndarray, point: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """(u, p, n) in the world: u the unit direction from the shoulder axis toward ``point``
@@ -150,7 +150,7 @@ def arm_frame(elbow: Elbow, data: pin.Data, tip: np.ndarray) -> ArmFrame | None:
     world, m); None with the wrist centre on the shoulder axis."""
     z_s = world_axis(data, elbow.shoulder_axis)
     centre = wrist_centre(data, elbow.wrist, tip)
-    directions = upper_arm_frame(np.array(data.oMi[elbow.shoulder_axis[0]].translation), z_s, centre)
+    directions = _upper_arm_frame(np.array(data.oMi[elbow.shoulder_axis[0]].translation), z_s, centre)
     return None if directions is None else ArmFrame(*directions)
 
 
@@ -230,7 +230,7 @@ def _shoulder_of(model: pin.Model, data: pin.Data, robot: Robot, arm: list[str],
         candidate = _revolute_axis(model, ancestor) if ancestor in arm_ids else None
         if candidate is not None:
             z_s = world_axis(data, candidate)
-            if np.linalg.norm(np.cross(z_s, z_e)) < PARALLEL and upper_arm_frame(
+            if np.linalg.norm(np.cross(z_s, z_e)) < PARALLEL and _upper_arm_frame(
                 np.array(data.oMi[ancestor].translation), z_s, np.array(data.oMi[elbow_axis[0]].translation)
             ):
                 return candidate
@@ -254,7 +254,7 @@ def _straight_value(
     pin.forwardKinematics(model, data, home)
     z_e, z_s = world_axis(data, elbow_axis), world_axis(data, shoulder_axis)
     elbow_origin = np.array(data.oMi[joint_id].translation)
-    frame = upper_arm_frame(np.array(data.oMi[shoulder_axis[0]].translation), z_s, elbow_origin)
+    frame = _upper_arm_frame(np.array(data.oMi[shoulder_axis[0]].translation), z_s, elbow_origin)
     assert frame is not None  # the shoulder was chosen with the elbow off its axis
     u = frame[0]
     forearm = wrist_centre(data, wrist, robot.frame_pose(home, robot.tip)[:3, 3]) - elbow_origin
@@ -279,5 +279,4 @@ __all__ = [
     "elbow_rate",
     "find_elbow",
     "remaining_rates",
-    "upper_arm_frame",
 ]

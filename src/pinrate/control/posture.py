@@ -50,7 +50,7 @@ class PostureJoints(NamedTuple):
     ranges: np.ndarray
 
 
-def posture_joints(
+def _posture_joints(
     positions: list[int], q_indices: list[int], lower: np.ndarray, upper: np.ndarray, preferred: np.ndarray
 ) -> PostureJoints:
     """:class:`PostureJoints` with the ranges filled in."""
@@ -84,7 +84,7 @@ def _limit_excess(joints: PostureJoints, values: np.ndarray) -> np.ndarray:
     return np.maximum(0.0, 1.0 - distance / (LIMIT_MARGIN * joints.ranges))
 
 
-def null_space_motion(jacobian: np.ndarray, descent: np.ndarray, threshold: float) -> np.ndarray:
+def _null_space_motion(jacobian: np.ndarray, descent: np.ndarray, threshold: float) -> np.ndarray:
     """N @ descent, N = I - J⁺ J (J: the partition's rows, linear rows already scaled): the
     part of the joint motion ``descent`` (n,) that leaves J's twist unchanged. J⁺ is the
     Moore-Penrose inverse with singular values under ``threshold`` · σ_1 cut, so N is a
@@ -122,7 +122,7 @@ class PostureTask:
         lower, upper = (np.array(bounds)[q_indices] for bounds in robot.position_limits())
         self.context = context
         self.gain = gain
-        self.joints = posture_joints(positions, q_indices, lower, upper, preferred[q_indices])
+        self.joints = _posture_joints(positions, q_indices, lower, upper, preferred[q_indices])
         """The joints it moves, their limits and preferred values."""
 
     def null_motion(self, observation: Observation, left_out: frozenset[str]) -> np.ndarray:
@@ -135,7 +135,7 @@ class PostureTask:
         kept = [position for position, name in enumerate(context.names) if name not in left_out]
         scaled = context.reduced(observation.jacobian)[:, kept] * context.row_scale_column
         rates = np.zeros(context.robot.nv)
-        rates[index.columns[kept]] = null_space_motion(scaled, descent[kept], context.singular_threshold)
+        rates[index.columns[kept]] = _null_space_motion(scaled, descent[kept], context.singular_threshold)
         return rates
 
 
@@ -144,7 +144,5 @@ __all__ = [
     "PostureJoints",
     "PostureTask",
     "gradient",
-    "null_space_motion",
     "objective",
-    "posture_joints",
 ]

@@ -105,7 +105,7 @@ def _singular_values(robot: Robot, partition: Partition, q: np.ndarray) -> list[
     return [np.linalg.svd(M, compute_uv=False) if M.size else np.zeros(0) for M in (jacobian, A, W)]
 
 
-def home_quality(robot: Robot, partition: Partition, q: np.ndarray, ranks: Ranks) -> HomeQuality:
+def _home_quality(robot: Robot, partition: Partition, q: np.ndarray, ranks: Ranks) -> HomeQuality:
     """:class:`HomeQuality` at q (one Jacobian, one SVD per matrix). Each matrix is judged by
     its singular value number rank (``ranks`` from :func:`generic_ranks`) rather than its
     last, so directions it can never span do not make every configuration singular."""
@@ -145,7 +145,7 @@ def find_home(
     else that neutral."""
     ranks = generic_ranks(robot, partition)
     for label, q in named:
-        if not _outside_limits(robot, q) and home_quality(robot, partition, q, ranks).well_conditioned:
+        if not _outside_limits(robot, q) and _home_quality(robot, partition, q, ranks).well_conditioned:
             return q.copy(), label
     neutral = robot.neutral()
     moved = _outside_limits(robot, neutral)
@@ -154,7 +154,7 @@ def find_home(
         index = robot.model.joints[robot.joint_id(joint)].idx_q  # a 1-DOF joint: one coordinate
         neutral[index] = min(max(neutral[index], low), high)
     label = f"neutral, with {', '.join(moved)} moved onto the nearest limit" if moved else "neutral"
-    if home_quality(robot, partition, neutral, ranks).comfortable and not _near_a_limit(robot, partition, neutral):
+    if _home_quality(robot, partition, neutral, ranks).comfortable and not _near_a_limit(robot, partition, neutral):
         return neutral, f"{label} (well-conditioned)"
     generator = np.random.default_rng(0)
     joints = [joint for joint in partition.joints if robot.model.joints[robot.joint_id(joint)].nv == 1]
@@ -169,7 +169,7 @@ def find_home(
             half = min((high - low) / 2, math.pi) if math.isfinite(high - low) else math.pi
             values = np.clip(centre + fraction * half * generator.uniform(-1.0, 1.0, SEARCH_DRAWS), low, high)
             robot.set_joint_values(draws, joint, values)
-        qualities = [home_quality(robot, partition, q, ranks) for q in draws]
+        qualities = [_home_quality(robot, partition, q, ranks) for q in draws]
         comfortable = [i for i, quality in enumerate(qualities) if quality.comfortable]
         if comfortable:
             chosen = max(comfortable, key=lambda i: qualities[i].inverse_condition)

@@ -31,7 +31,7 @@ Selector = tuple[Any, Any]
 """An index of J[rows, columns]: two slices, or ``np.ix_`` index arrays."""
 
 
-def selector(rows: list[int], columns: list[int]) -> Selector:
+def _selector(rows: list[int], columns: list[int]) -> Selector:
     """Index of J[rows, columns]: two slices when both are contiguous (one cheap view)."""
 
     def as_slice(indices: list[int]) -> slice | None:
@@ -84,7 +84,7 @@ class PartitionIndex:
         set_(self, "columns", columns)
         linear, angular = self.rows[: self.m].tolist(), self.rows[self.m :].tolist()
         arm, wrist = self.arm_columns.tolist(), self.wrist_columns.tolist()
-        set_(self, "selectors", tuple(selector(r, c) for r in (linear, angular) for c in (arm, wrist)))
+        set_(self, "selectors", tuple(_selector(r, c) for r in (linear, angular) for c in (arm, wrist)))
         set_(self, "small", square_and_small(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
         set_(self, "square", self.m == self.arm_columns.size and self.k == self.wrist_columns.size)
         set_(self, "pseudo_g", pseudo_g_is_exact(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))

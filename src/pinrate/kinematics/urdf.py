@@ -56,10 +56,10 @@ def read_urdf(path: Path) -> tuple[str, str]:
         data = path.read_bytes()
     except OSError as error:  # too long a name, no permission, a device that fails
         raise LoadError(f"URDF file cannot be read: {str(path)[:200]} ({error.strerror or error})") from None
-    return decode_xml(data, str(path))
+    return _decode_xml(data, str(path))
 
 
-def decode_xml(data: bytes, label: str) -> tuple[str, str]:
+def _decode_xml(data: bytes, label: str) -> tuple[str, str]:
     """XML bytes as text, in the encoding its byte-order mark or declaration names (UTF-8
     when neither does, as XML 1.0 §4.3.3 says), and that encoding's name. The declaration
     itself is dropped, since the text no longer is in that encoding."""
@@ -105,7 +105,7 @@ _PREFIXED_NAME = re.compile(r"[<\s/]([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*")
 _ROBOT_START = re.compile(r"<robot(?=[\s>/])")
 
 
-def parse_like_urdfdom(text: str) -> ET.Element:
+def _parse_like_urdfdom(text: str) -> ET.Element:
     """The XML tree as urdfdom (through tinyxml2, which knows no namespaces) sees it.
 
     Prefixes that the file uses without declaring them (``drake:acceleration``, a common
@@ -133,7 +133,7 @@ def _check_urdf_text(text: str, label: str, max_joints: int) -> ET.Element:
     """The URDF's root element; LoadError naming ``label`` for malformed XML, a non-URDF, a
     xacro, or a structure Pinocchio cannot build soundly (:mod:`.urdf_structure`)."""
     try:
-        root = parse_like_urdfdom(text)
+        root = _parse_like_urdfdom(text)
     except ET.ParseError as error:
         if "<xacro:" in text:  # xacro without its namespace declared
             raise LoadError(_XACRO_HINT.format(label=label)) from None
@@ -241,7 +241,7 @@ def robot_from_urdf(
                 configuration[model.joints[model.getJointId(joint)].idx_q] = value
         references["home"] = configuration
     if "home" in references:
-        references["home"] = into_limits(model, references["home"])
+        references["home"] = _into_limits(model, references["home"])
     robot_name = name or root.get("name") or label
     robot = Robot(
         model,
@@ -252,14 +252,14 @@ def robot_from_urdf(
         urdf_text=geometry_text,
         package_dirs=package_dirs,
         reference_configurations=references,
-        mimic=mimic_joints(root),
+        mimic=_mimic_joints(root),
         srdf_path=srdf_path,
     )
     if search_home:
         states = srdf_states(srdf_path) if srdf_path is not None and srdf_path.is_file() else []
         order = [state for state in (["home"] if "home" in states else []) + states if state in references]
         named = [
-            (f"SRDF group_state {state!r}", into_limits(model, references[state])) for state in dict.fromkeys(order)
+            (f"SRDF group_state {state!r}", _into_limits(model, references[state])) for state in dict.fromkeys(order)
         ]
         q, why = find_home(robot, Partition.auto(robot), named)
         robot.reference_configurations["home"] = q
@@ -267,7 +267,7 @@ def robot_from_urdf(
     return robot
 
 
-def mimic_joints(root: ET.Element) -> dict[str, str]:
+def _mimic_joints(root: ET.Element) -> dict[str, str]:
     """Joint -> the joint it mimics, from the URDF's ``<mimic joint=...>`` elements (Pinocchio
     models them as independent joints; pinrate leaves both out of the arm)."""
     pairs = {}
@@ -278,7 +278,7 @@ def mimic_joints(root: ET.Element) -> dict[str, str]:
     return pairs
 
 
-def into_limits(model: pin.Model, q: np.ndarray) -> np.ndarray:
+def _into_limits(model: pin.Model, q: np.ndarray) -> np.ndarray:
     """q with each 1-DOF joint brought inside its limits: revolute ones by whole turns when
     that suffices (an SRDF pose may be written in another turn), else clamped."""
     q = q.copy()

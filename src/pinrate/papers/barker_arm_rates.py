@@ -117,7 +117,7 @@ def printed_arm_rates_error(count: int = 100) -> float:
 
 
 @row
-def arm_rates_row() -> Result:
+def _arm_rates_row() -> Result:
     """Barker eq. 34-37: MCA1's and MCA2's steps against the closed form, the signs derived."""
     deviation = max(arm_rates_deviation(), arm_rates_deviation(alpha3=1.4, a3=0.05, r3=0.03))
     return Result(
@@ -133,7 +133,7 @@ def arm_rates_row() -> Result:
 
 
 # ---------------------------------------------------------------------- eq. 38, the generalized inverse
-def generalized_inverse_rates(
+def _generalized_inverse_rates(
     q: np.ndarray, tvel: np.ndarray, threshold: float, parameters: Mapping[str, float] | None = None
 ) -> np.ndarray:
     """Eq. 38: M* TVEL^, M* the Moore-Penrose inverse with singular values under
@@ -186,7 +186,9 @@ def singular_case(which: int, along: float = 0.0, algorithm: str = "mca2") -> Si
     controller = unlimited_controller(robot, algorithm, singularity="generalized_inverse")
     step = controller.step(q, hand_twist(robot, q, tvel))
     threshold = controller.singular_threshold
-    return SingularCase(q, tvel, step, generalized_inverse_rates(q, tvel, threshold), reduction_2x2(q, tvel, threshold))
+    return SingularCase(
+        q, tvel, step, _generalized_inverse_rates(q, tvel, threshold), reduction_2x2(q, tvel, threshold)
+    )
 
 
 def generalized_inverse_deviation() -> float:
@@ -202,7 +204,7 @@ def generalized_inverse_deviation() -> float:
 
 
 @row
-def generalized_inverse_row() -> Result:
+def _generalized_inverse_row() -> Result:
     """Barker eq. 38: the step with ``singularity="generalized_inverse"`` is M* TVEL^."""
     return Result(
         "Barker eq. 38",
@@ -272,7 +274,7 @@ def reduction_at_theta1_zero() -> tuple[float, float, float]:
 
 
 @row
-def reduction_row() -> Result:
+def _reduction_row() -> Result:
     """Barker eq. 39-44: the step against the reduction, and the reduction's own singularity."""
     condition, _, reduction_error = reduction_at_theta1_zero()
     reference_tvel = ", ".join(f"{value:g}" for value in REFERENCE_TVEL)
@@ -289,7 +291,7 @@ def reduction_row() -> Result:
 
 # ---------------------------------------------------------------------- eq. 38 against eq. 39-44 at M's singularities
 @row
-def full_extension_row() -> Result:
+def _full_extension_row() -> Result:
     """Barker eq. 38 against eq. 39-44 at theta3 = 0 (module docstring)."""
     extended, extended_along = singular_case(0), singular_case(0, ALONG_THE_ARM)
     return Result(
@@ -306,7 +308,7 @@ def full_extension_row() -> Result:
 
 
 @row
-def least_radius_row() -> Result:
+def _least_radius_row() -> Result:
     """Barker eq. 38 against eq. 39-44 at S2 ES + F5 = 0 (module docstring)."""
     least_radius = singular_case(1)
     return Result(

@@ -144,7 +144,7 @@ def elbow_bends(cycles: int = 3) -> list[float]:
 
 
 @row
-def auxiliary_elbow_row() -> Result:
+def _auxiliary_elbow_row() -> Result:
     """Barker eq. 45-46 against pinrate's auxiliary elbow control (:mod:`pinrate.control.elbow`)."""
     elbow, shoulder = auxiliary_elbow_deviation()
     bends = ", ".join(f"{bend:+.2f}" for bend in elbow_bends())
@@ -161,7 +161,7 @@ def auxiliary_elbow_row() -> Result:
 
 
 @row
-def upper_arm_row() -> Result:
+def _upper_arm_row() -> Result:
     """Barker eq. B27-B29 against the robot's upper arm (module docstring)."""
     components, as_printed, bracket_only = upper_arm_component_errors()
     return Result(

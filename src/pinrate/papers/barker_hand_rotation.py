@@ -97,7 +97,7 @@ def hand_to_base_errors(count: int = 100, **lengths: float) -> tuple[float, floa
 
 
 @row
-def hand_to_base_row() -> Result:
+def _hand_to_base_row() -> Result:
     """Barker eq. B1-B24 against the robot's hand rotation, P2 derived and as printed."""
     derived, printed, b4 = hand_to_base_errors()
     derived_off, printed_off, b4_off = hand_to_base_errors(alpha3=1.4, a3=0.05, r3=0.03)

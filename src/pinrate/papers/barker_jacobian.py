@@ -116,7 +116,7 @@ def barker_det_deviation(count: int = 300, **lengths: float) -> float:
 
 
 @row
-def determinant_row() -> Result:
+def _determinant_row() -> Result:
     """Barker eq. D9: det M against the robot's arm block."""
     return Result(
         "Barker eq. D9",
@@ -149,7 +149,7 @@ def barker_singular(q: np.ndarray) -> bool:
 
 
 @row
-def singularities_row() -> Result:
+def _singularities_row() -> Result:
     """Barker eq. 32-33: MCA2 reports block A singular on both surfaces."""
     extended, folded = barker_singular_configurations()
     return Result(
@@ -173,7 +173,7 @@ def m_deviation(count: int = 100, **lengths: float) -> float:
 
 
 @row
-def m_row() -> Result:
+def _m_row() -> Result:
     """Barker eq. 25-31: M against the robot's arm block in base axes (F2 with SN~)."""
     return Result(
         "Barker eq. 25-31",

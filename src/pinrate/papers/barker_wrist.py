@@ -53,7 +53,7 @@ def wrist_residual_rotation(q: np.ndarray, rvel: np.ndarray, arm_rates: np.ndarr
     return np.asarray(rvel, dtype=float) - z0 * arm_rates[0] - z1 * (arm_rates[1] + arm_rates[2])
 
 
-def wrist_terms(
+def _wrist_terms(
     q: np.ndarray, rvel_tilde: np.ndarray, parameters: Mapping[str, float] | None = None
 ) -> tuple[float, float, float, float, float]:
     """(D1, D2, D3, D4, D5) of eq. 52-56 from RVEL~ (rad/s, base axes)."""
@@ -69,12 +69,12 @@ def wrist_terms(
     return D1, D2, D3, D4, D5
 
 
-def wrist_system(
+def _wrist_system(
     q: np.ndarray, rvel_tilde: np.ndarray, parameters: Mapping[str, float] | None = None
 ) -> tuple[float, np.ndarray, np.ndarray]:
     """(theta5 rate of eq. 49, M2 of eq. 58, g2 of eq. 59): g2 = M2 [theta4 theta6]'."""
     alpha3 = arm_parameters(parameters)["alpha3"]
-    _, D2, D3, D4, D5 = wrist_terms(q, rvel_tilde, parameters)
+    _, D2, D3, D4, D5 = _wrist_terms(q, rvel_tilde, parameters)
     t4, t5 = float(q[3]), float(q[4])
     C4, S4, C5, S5 = math.cos(t4), math.sin(t4), math.cos(t5), math.sin(t5)
     theta5 = -C4 * D5 - S4 * D4  # eq. 49
@@ -90,7 +90,7 @@ def wrist_rates(
     (eq. 60), M2* the Moore-Penrose inverse with singular values under ``threshold`` x sigma_1
     cut (M2^-1 where theta5 is away from 0; at theta5 = 0 it splits theta4 + theta6 = D
     equally, eq. 61)."""
-    theta5, M2, g2 = wrist_system(q, rvel_tilde, parameters)
+    theta5, M2, g2 = _wrist_system(q, rvel_tilde, parameters)
     theta4, theta6 = np.linalg.pinv(M2, rcond=threshold) @ g2  # eq. 60
     return np.array([theta4, theta5, theta6])
 
@@ -101,7 +101,7 @@ def wrist_rule_rates(
     """(theta4, theta5, theta6) rates (rad/s) at theta5 = 0 by Barker's rule: eq. 61 with the
     task split equally ("split"), eq. 62 theta4 = 0 ("hold_first"), eq. 63 theta6 held at its
     limit ("last_then_first"); theta5 by eq. 49, D = SAL3 D3 - CAL3 D2."""
-    theta5, _, g2 = wrist_system(q, rvel_tilde, parameters)
+    theta5, _, g2 = _wrist_system(q, rvel_tilde, parameters)
     D = float(g2[1])
     theta4, theta6 = {"split": (D / 2, D / 2), "hold_first": (0.0, D), "last_then_first": (D, 0.0)}[rule]
     return np.array([theta4, theta5, theta6])
@@ -142,7 +142,7 @@ def barker_wrist_deviation(count: int = 200, *, solver: RateSolver | None = None
         rates = np.asarray(solve(robot, q, twist), dtype=float)
         rvel_hat = hand_to_base(q, lengths) @ twist[3:]  # eq. B1
         rvel_tilde = wrist_residual_rotation(q, rvel_hat, rates[:3])  # eq. 48
-        _, D2, D3, D4, D5 = wrist_terms(q, rvel_tilde, lengths)  # eq. 52-56
+        _, D2, D3, D4, D5 = _wrist_terms(q, rvel_tilde, lengths)  # eq. 52-56
         C4, S4, C5, S5 = math.cos(q[3]), math.sin(q[3]), math.cos(q[4]), math.sin(q[4])
         residual = max(
             abs(rates[4] - (-C4 * D5 - S4 * D4)),  # eq. 49
@@ -154,7 +154,7 @@ def barker_wrist_deviation(count: int = 200, *, solver: RateSolver | None = None
 
 
 @row
-def wrist_residual_row() -> Result:
+def _wrist_residual_row() -> Result:
     """Barker eq. 49-51: pinrate's MCA2 rates put into the paper's wrist equations."""
     return Result(
         "Barker eq. 49-51",
@@ -222,7 +222,7 @@ def wrist_region_rates(theta5: float = 0.02) -> tuple[np.ndarray, np.ndarray]:
 
 
 @row
-def wrist_generalized_inverse_row() -> Result:
+def _wrist_generalized_inverse_row() -> Result:
     """Barker eq. 57-60: the step's wrist rates against M2* g2, off and at theta5 = 0."""
     off, at_zero = wrist_generalized_inverse_deviation()
     region_step, region_closed_form = wrist_region_rates()
@@ -251,7 +251,7 @@ def wrist_rule_deviations() -> dict[str, float]:
 
 
 @row
-def wrist_rules_row() -> Result:
+def _wrist_rules_row() -> Result:
     """Barker eq. 61-63: the step at theta5 = 0 against each of Barker's rules."""
     rules = wrist_rule_deviations()
     return Result(

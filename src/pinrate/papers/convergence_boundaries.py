@@ -19,7 +19,7 @@ from .table import Result, deviation_text, row
 
 
 # ---------------------------------------------------------------------- §5.1 polar
-def polar_G_deviation(count: int = 500) -> float:
+def _polar_G_deviation(count: int = 500) -> float:
     """max ``|G - l C3 / (d2 + l C3)|`` (eq. 56), l = 0.2."""
     robot = robots.planar_polar()
 
@@ -31,12 +31,12 @@ def polar_G_deviation(count: int = 500) -> float:
 
 
 @row
-def polar_G_row() -> Result:
+def _polar_G_row() -> Result:
     """S&K eq. 56: the polar robot's G."""
     return Result(
         "S&K eq. 56",
         "polar: G = l C3 / (d2 + l C3)",
-        f"max deviation {deviation_text(polar_G_deviation())}",
+        f"max deviation {deviation_text(_polar_G_deviation())}",
         "theorem/test_convergence.py::test_planar_polar_G_is_eq_56",
     )
 
@@ -49,7 +49,7 @@ def polar_boundary_agreement(count: int = 5000) -> float:
 
 
 @row
-def polar_boundary_row() -> Result:
+def _polar_boundary_row() -> Result:
     """S&K eq. 58, Fig. 5: the polar robot's boundary."""
     return Result(
         "S&K eq. 58, Fig. 5",
@@ -67,7 +67,7 @@ def polar_rule(points: int = 61) -> float:
 
 
 @row
-def polar_rule_row() -> Result:
+def _polar_rule_row() -> Result:
     """S&K §5.1's rule: d2 / l > 2 converges in the whole work volume."""
     smallest = polar_rule()
     return Result(
@@ -79,7 +79,7 @@ def polar_rule_row() -> Result:
 
 
 # ---------------------------------------------------------------------- §5.2 SCARA
-def scara_G_deviation(count: int = 500) -> float:
+def _scara_G_deviation(count: int = 500) -> float:
     """max ``|G - l3 S23 / (l2 S2 + l3 S23)|`` (eq. 60), relative, l1 = l2 = l3 = 0.4."""
     robot = robots.scara()
 
@@ -92,12 +92,12 @@ def scara_G_deviation(count: int = 500) -> float:
 
 
 @row
-def scara_G_row() -> Result:
+def _scara_G_row() -> Result:
     """S&K eq. 60: the SCARA's G."""
     return Result(
         "S&K eq. 60",
         "SCARA: G = l3 S23 / (l2 S2 + l3 S23)",
-        f"max relative deviation {deviation_text(scara_G_deviation())}",
+        f"max relative deviation {deviation_text(_scara_G_deviation())}",
         "theorem/test_convergence.py::test_scara_G_is_eq_60",
     )
 
@@ -110,7 +110,7 @@ def scara_boundary_agreement(count: int = 5000) -> float:
 
 
 @row
-def scara_boundary_row() -> Result:
+def _scara_boundary_row() -> Result:
     """S&K eq. 63, Fig. 8: the SCARA's boundary."""
     return Result(
         "S&K eq. 63, Fig. 8",
@@ -130,7 +130,7 @@ HIRATA_CLOSED_FORM = 0.275 * math.sin(math.radians(25)) / 2
 
 
 @row
-def hirata_row() -> Result:
+def _hirata_row() -> Result:
     """S&K §5.2, Fig. 10: the Hirata ARH-300's largest tool length."""
     return Result(
         "S&K §5.2, Fig. 10",

@@ -45,7 +45,7 @@ def fig6_poses(which: str) -> tuple[np.ndarray, np.ndarray]:
     return polar_pose_with_lambda(*start), polar_pose_with_lambda(*target)
 
 
-def fig6_run(which: str) -> Simulation:
+def _fig6_run(which: str) -> Simulation:
     """Fig. 6(``which``), ``which`` "a" or "b", rerun with the dead-beat sensor from poses
     with the printed λ (:func:`fig6_poses`)."""
     return simulate_mca2(robots.planar_polar(), *fig6_poses(which), dead_beat=True)
@@ -53,13 +53,13 @@ def fig6_run(which: str) -> Simulation:
 
 def fig6() -> tuple[Simulation, Simulation]:
     """Fig. 6 rerun from poses with the printed λ: (a) 0.50 -> 0.45, (b) -1.5 -> -0.9."""
-    return fig6_run("a"), fig6_run("b")
+    return _fig6_run("a"), _fig6_run("b")
 
 
 @row
-def fig6a_row() -> Result:
+def _fig6a_row() -> Result:
     """S&K Fig. 6(a): λ 0.50 -> 0.45 converges."""
-    converging = fig6_run("a")
+    converging = _fig6_run("a")
     return Result(
         "S&K Fig. 6(a)",
         "polar, MCA2: λ 0.50 -> 0.45, converges",
@@ -87,9 +87,9 @@ def polar_pole_crossings(q: np.ndarray, l: float = 0.2) -> int:  # noqa: E741
 
 
 @row
-def fig6b_row() -> Result:
+def _fig6b_row() -> Result:
     """S&K Fig. 6(b): the servo's run and its step continued past the stop rules (module docstring)."""
-    servo_run = fig6_run("b")
+    servo_run = _fig6_run("b")
     free, held = fig6b_continued()
     total, total_free = servo_run.total_error, free.total_error
     stop = len(total) - 1

@@ -45,7 +45,7 @@ FIG9_POSES = {
 :func:`scara_configuration`."""
 
 
-def fig9_run(which: str) -> Simulation:
+def _fig9_run(which: str) -> Simulation:
     """Fig. 9(``which``), ``which`` "a" or "b", from the printed poses (:data:`FIG9_POSES`),
     default servo."""
     start, target = FIG9_POSES[which]
@@ -58,13 +58,13 @@ def fig9() -> tuple[Simulation, Simulation]:
     With λ > 0 real, Re λ > 1 makes the error grow for any gain, so no dead-beat sensor is
     needed to see (b) fail.
     """
-    return fig9_run("a"), fig9_run("b")
+    return _fig9_run("a"), _fig9_run("b")
 
 
 @row
-def fig9a_row() -> Result:
+def _fig9a_row() -> Result:
     """S&K Fig. 9(a): λ 0.695 -> 0.718 converges."""
-    converging = fig9_run("a")
+    converging = _fig9_run("a")
     return Result(
         "S&K Fig. 9(a)",
         "SCARA, MCA2: λ 0.695 -> 0.718, converges",
@@ -74,9 +74,9 @@ def fig9a_row() -> Result:
 
 
 @row
-def fig9b_row() -> Result:
+def _fig9b_row() -> Result:
     """S&K Fig. 9(b): λ 1.62 -> 1.70 diverges, until the servo crosses to the other elbow branch."""
-    diverging = fig9_run("b")
+    diverging = _fig9_run("b")
     return Result(
         "S&K Fig. 9(b)",
         "SCARA, MCA2: λ 1.62 -> 1.70, diverges",

@@ -37,7 +37,7 @@ def two_link_deviation(count: int = 200) -> float:
 
 
 @row
-def two_link_row() -> Result:
+def _two_link_row() -> Result:
     """S&K eq. 10 (Fig. 1): the two-link planar arm's J in the sensor frame."""
     return Result(
         "S&K eq. 10 (Fig. 1)",
@@ -57,7 +57,7 @@ def cylindrical_deviation(count: int = 200) -> float:
 
 
 @row
-def cylindrical_row() -> Result:
+def _cylindrical_row() -> Result:
     """S&K eq. 13: the cylindrical robot's J."""
     return Result(
         "S&K eq. 13",
@@ -77,7 +77,7 @@ def spherical_deviation(count: int = 200) -> float:
 
 
 @row
-def spherical_row() -> Result:
+def _spherical_row() -> Result:
     """S&K eq. 16 (Fig. 2): the spherical robot's J."""
     return Result(
         "S&K eq. 16 (Fig. 2)",
@@ -101,7 +101,7 @@ def first_joint_independent() -> dict[str, bool]:
 
 
 @row
-def first_joint_row() -> Result:
+def _first_joint_row() -> Result:
     """S&K §2: J in the sensor frame does not depend on theta1."""
     independence = first_joint_independent()
     return Result(
@@ -112,7 +112,7 @@ def first_joint_row() -> Result:
     )
 
 
-def arm_jacobian_is_monomial(robot: Robot, joints: list[str], count: int = 50) -> bool:
+def _arm_jacobian_is_monomial(robot: Robot, joints: list[str], count: int = 50) -> bool:
     """Whether J[linear, joints] has one non-zero per row and column at every sampled q."""
     columns = [robot.velocity_indices(j)[0] for j in joints]
     for q in robot.sample_configurations(count, 3):
@@ -128,11 +128,11 @@ def diagonal_arms() -> dict[str, bool]:
     scara = robots.scara(tip="quill", sensor="sensor")
     ur5 = _ur5_wrist_centre()
     return {
-        "cartesian": arm_jacobian_is_monomial(cartesian, ["d1", "d2", "d3"]),
-        "cylindrical": arm_jacobian_is_monomial(robots.cylindrical(), ["theta1", "d2", "d3"]),
-        "spherical": arm_jacobian_is_monomial(robots.spherical(), ["theta1", "theta2", "d3"]),
-        "scara": arm_jacobian_is_monomial(scara, ["theta1", "theta2", "d"]),
-        "articulated (ur5)": arm_jacobian_is_monomial(
+        "cartesian": _arm_jacobian_is_monomial(cartesian, ["d1", "d2", "d3"]),
+        "cylindrical": _arm_jacobian_is_monomial(robots.cylindrical(), ["theta1", "d2", "d3"]),
+        "spherical": _arm_jacobian_is_monomial(robots.spherical(), ["theta1", "theta2", "d3"]),
+        "scara": _arm_jacobian_is_monomial(scara, ["theta1", "theta2", "d"]),
+        "articulated (ur5)": _arm_jacobian_is_monomial(
             ur5, ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint"]
         ),
     }
@@ -143,7 +143,7 @@ def _ur5_wrist_centre() -> Robot:
 
 
 @row
-def diagonal_row() -> Result:
+def _diagonal_row() -> Result:
     """S&K §2: J is diagonal iff the joints move the arm end in orthogonal directions."""
     diagonal = diagonal_arms()
     return Result(
@@ -182,7 +182,7 @@ def mca2_minus_exact(robot: Robot, count: int = 50) -> float:
 
 
 @row
-def b_zero_row() -> Result:
+def _b_zero_row() -> Result:
     """S&K eq. 22: B = 0 iff the wrist axes meet at the TCP; then MCA2 is exact."""
     barker_centre = robots.barker_arm()
     return Result(

@@ -70,7 +70,7 @@ def spherical_6dof_jacobian(q: np.ndarray, l: float) -> np.ndarray:  # noqa: E74
     )
 
 
-def spherical_6dof_eigenvalues(q: np.ndarray, l: float) -> np.ndarray:  # noqa: E741
+def _spherical_6dof_eigenvalues(q: np.ndarray, l: float) -> np.ndarray:  # noqa: E741
     """0, l C5 / (d3 + l C5), l K / (d3 C2 + l K), K = C2 C5 - S2 C4 S5 (from the corrected eq. 70)."""
     _, t2, d3, t4, t5, _ = q
     K = math.cos(t2) * math.cos(t5) - math.sin(t2) * math.cos(t4) * math.sin(t5)
@@ -88,12 +88,12 @@ def spherical_6dof_deviations(count: int = 300) -> tuple[float, float]:
             found = np.sort(np.abs(convergence(robot, q).eigenvalues))
         except SingularBlockError:
             continue
-        worst_eigen = max(worst_eigen, float(np.abs(found - np.sort(np.abs(spherical_6dof_eigenvalues(q, l)))).max()))
+        worst_eigen = max(worst_eigen, float(np.abs(found - np.sort(np.abs(_spherical_6dof_eigenvalues(q, l)))).max()))
     return worst_jacobian, worst_eigen
 
 
 @row
-def jacobian_and_eigenvalues_row() -> Result:
+def _jacobian_and_eigenvalues_row() -> Result:
     """S&K eq. 70-71: J against the corrected eq. 70, and G's eigenvalues."""
     jacobian_deviation, eigen_deviation = spherical_6dof_deviations()
     return Result(
@@ -158,7 +158,7 @@ def printed_eq71_errors(count: int = 300) -> tuple[float, float, float]:
 
 
 @row
-def printed_eq71_row() -> Result:
+def _printed_eq71_row() -> Result:
     """S&K eq. 71 against G of the printed eq. 70: entry (3, 3) misprinted."""
     printed_others, printed_33, corrected_33 = printed_eq71_errors()
     return Result(
@@ -183,7 +183,7 @@ class WorkVolume:
     sufficient: bool  # pinrate's ρ < 1 wherever eq. 72 holds for every theta4 (three theta4 each)
 
 
-def eq72_K(theta2: np.ndarray, theta4: np.ndarray, theta5: np.ndarray) -> np.ndarray:
+def _eq72_K(theta2: np.ndarray, theta4: np.ndarray, theta5: np.ndarray) -> np.ndarray:
     """K = C2 C5 - S2 C4 S5 of eq. 72 (rad in, dimensionless out)."""
     return np.cos(theta2) * np.cos(theta5) - np.sin(theta2) * np.cos(theta4) * np.sin(theta5)
 
@@ -201,7 +201,7 @@ def spherical_6dof_work_volume(count: int = 20000, seed: int = 12) -> WorkVolume
     robot = robots.spherical_6dof()
     q = robot.sample_configurations(count, seed)
     theta2, theta5 = q[:, 1], q[:, 4]
-    every = (eq72_K(theta2, np.zeros(count), theta5) > 0) & (eq72_K(theta2, np.full(count, math.pi), theta5) > 0)
+    every = (_eq72_K(theta2, np.zeros(count), theta5) > 0) & (_eq72_K(theta2, np.full(count, math.pi), theta5) > 0)
     region = q[every]
     variants = [region]
     for theta4 in (0.0, math.pi):
@@ -212,13 +212,13 @@ def spherical_6dof_work_volume(count: int = 20000, seed: int = 12) -> WorkVolume
     return WorkVolume(
         samples=count,
         every_theta4=float(np.mean(every)),
-        theta4_zero=float(np.mean(eq72_K(theta2, np.zeros(count), theta5) > 0)),
+        theta4_zero=float(np.mean(_eq72_K(theta2, np.zeros(count), theta5) > 0)),
         sufficient=bool((radii < 1).all()),
     )
 
 
 @row
-def work_volume_row() -> Result:
+def _work_volume_row() -> Result:
     """S&K eq. 72-73, Fig. 12: "at least within 50 percent of the work volume" (module docstring)."""
     volume = spherical_6dof_work_volume()
     return Result(

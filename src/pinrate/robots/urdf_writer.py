@@ -25,14 +25,14 @@ def axis_rotation(axis: str, angle: float) -> np.ndarray:
     }[axis]
 
 
-def format_numbers(values: Sequence[float] | np.ndarray) -> str:
+def _format_numbers(values: Sequence[float] | np.ndarray) -> str:
     # Shortest round-trip repr: URDF angles keep full double precision.
     return " ".join(repr(0.0 if abs(v) < 1e-15 else float(v)) for v in values)
 
 
 def origin(rotation: np.ndarray | None = None, xyz: Sequence[float] = (0, 0, 0)) -> str:
     rpy = pin.rpy.matrixToRpy(rotation) if rotation is not None else np.zeros(3)
-    return f'<origin xyz="{format_numbers(xyz)}" rpy="{format_numbers(rpy)}"/>'
+    return f'<origin xyz="{_format_numbers(xyz)}" rpy="{_format_numbers(rpy)}"/>'
 
 
 @dataclass
@@ -112,7 +112,7 @@ class UrdfBuilder:
             for shape in shapes:
                 geometry = {
                     "cylinder": lambda s: f'<cylinder radius="{s[0]:.6g}" length="{s[1]:.6g}"/>',
-                    "box": lambda s: f'<box size="{format_numbers(s)}"/>',
+                    "box": lambda s: f'<box size="{_format_numbers(s)}"/>',
                     "sphere": lambda s: f'<sphere radius="{s[0]:.6g}"/>',
                 }[shape.kind](shape.size)
                 lines += [
@@ -129,7 +129,7 @@ class UrdfBuilder:
             lines.append(f'    <child link="{joint.child}"/>')
             lines.append(f"    {origin(joint.rotation, joint.xyz)}")
             if joint.kind != "fixed":
-                lines.append(f'    <axis xyz="{format_numbers(joint.axis)}"/>')
+                lines.append(f'    <axis xyz="{_format_numbers(joint.axis)}"/>')
                 lower, upper = joint.limits if joint.limits else (-_PI, _PI)
                 bounds = f'lower="{float(lower)!r}" upper="{float(upper)!r}"'
                 lines.append(f'    <limit {bounds} effort="100" velocity="2"/>')

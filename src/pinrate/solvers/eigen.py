@@ -73,7 +73,7 @@ ARRAYS = Ops(np.sqrt, np.cbrt, np.arccos, np.cos, np.hypot, np.maximum, np.minim
 """numpy arrays: elementwise over a stack of matrices."""
 
 
-def spectral_radius_1(a: Any, ops: Ops) -> Any:
+def _spectral_radius_1(a: Any, ops: Ops) -> Any:
     """max ``|λ|`` of [[a]]."""
     return ops.absolute(a)
 

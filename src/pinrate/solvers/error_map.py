@@ -72,7 +72,7 @@ class ErrorMap:
     coupling: tuple[float, float]
 
 
-def approximate_inverse(jacobian: np.ndarray, m: int, arm_columns: int, algorithm: str) -> np.ndarray:
+def _approximate_inverse(jacobian: np.ndarray, m: int, arm_columns: int, algorithm: str) -> np.ndarray:
     """K (n x r): the algorithm's rates for each unit twist, J the partition's (r x n) with
     its m linear rows first and its arm_columns arm joints first.
 
@@ -101,7 +101,7 @@ def error_map(jacobian: np.ndarray, m: int, arm_columns: int, algorithm: str) ->
         SingularBlockError: a block algorithm met a singular square block.
     """
     rows, columns = jacobian.shape
-    inverse = approximate_inverse(jacobian, m, arm_columns, algorithm)
+    inverse = _approximate_inverse(jacobian, m, arm_columns, algorithm)
     task = np.eye(rows) - jacobian @ inverse
     matrix, space = (task, "task") if rows <= columns else (np.eye(columns) - inverse @ jacobian, "joint")
     eigenvalues = np.linalg.eigvals(matrix) if matrix.size else np.zeros(0, dtype=complex)

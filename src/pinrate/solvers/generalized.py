@@ -31,7 +31,7 @@ def generalized_inverter(threshold: float) -> Inverter:
     return lambda M, _block: truncated_pinv(M, threshold)
 
 
-def damped_inverse(M: np.ndarray, damping: float) -> np.ndarray:
+def _damped_inverse(M: np.ndarray, damping: float) -> np.ndarray:
     """M# = Σ σ_i / (σ_i² + λ² σ_1²) v_i u_i^T with λ = ``damping`` (relative, >= 0): M^T (M M^T
     + λ² σ_1² I)^-1 without forming it. Finite for every finite M; M^+ when λ = 0."""
     rows, cols = M.shape
@@ -45,8 +45,8 @@ def damped_inverse(M: np.ndarray, damping: float) -> np.ndarray:
 
 
 def damped_inverter(damping: float) -> Inverter:
-    """Blocks inverted by :func:`damped_inverse` at relative damping ``damping``."""
-    return lambda M, _block: damped_inverse(M, damping)
+    """Blocks inverted by ``_damped_inverse`` at relative damping ``damping``."""
+    return lambda M, _block: _damped_inverse(M, damping)
 
 
 def filtered_rates(
@@ -66,4 +66,4 @@ def filtered_rates(
     return np.concatenate([arm, wrist])
 
 
-__all__ = ["damped_inverse", "damped_inverter", "filtered_rates", "generalized_inverter"]
+__all__ = ["damped_inverter", "filtered_rates", "generalized_inverter"]

@@ -52,7 +52,7 @@ def is_loopback(host: str) -> bool:
         return False
 
 
-def machine_addresses() -> set[str]:
+def _machine_addresses() -> set[str]:
     """The IPv4 addresses this machine is known by: its host name's addresses and the one it
     sends from towards the outside (found by connecting a UDP socket: no packet leaves)."""
     addresses = {"127.0.0.1"}
@@ -61,13 +61,13 @@ def machine_addresses() -> set[str]:
             addresses.add(str(address[0]))
     except (OSError, UnicodeError):
         pass
-    outward = outward_address()
+    outward = _outward_address()
     if outward:
         addresses.add(outward)
     return addresses
 
 
-def outward_address() -> str:
+def _outward_address() -> str:
     """The address this machine sends from towards a public address ('' without a route)."""
     try:
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
@@ -105,8 +105,8 @@ class AccessPolicy:
             names = set(LOOPBACK_NAMES) | {host.lower()}
             self.url_host = host
         elif wildcard:
-            names = machine_addresses() | set(LOOPBACK_NAMES) | {socket.gethostname().lower()}
-            self.url_host = outward_address() or socket.gethostname()
+            names = _machine_addresses() | set(LOOPBACK_NAMES) | {socket.gethostname().lower()}
+            self.url_host = _outward_address() or socket.gethostname()
         else:
             names = {host.lower(), socket.gethostbyname(host)}
             self.url_host = host
@@ -140,4 +140,4 @@ class AccessPolicy:
         return given is not None and hmac.compare_digest(given.encode("utf-8"), self.token.encode("utf-8"))
 
 
-__all__ = ["SECURITY_HEADERS", "TOKEN_BYTES", "AccessPolicy", "is_loopback", "machine_addresses"]
+__all__ = ["SECURITY_HEADERS", "TOKEN_BYTES", "AccessPolicy", "_machine_addresses", "is_loopback"]

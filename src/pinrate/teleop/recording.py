@@ -33,10 +33,10 @@ _FIRST_FORMAT = "pinrate-teleop-1"
 
 
 CHUNK = 2048
-"""Ticks converted to an array at a time (see :func:`converted`)."""
+"""Ticks converted to an array at a time (see ``_converted``)."""
 
 
-def converted(values: list, dtype: type) -> np.ndarray:
+def _converted(values: list, dtype: type) -> np.ndarray:
     """``np.array(values, dtype=dtype)``, :data:`CHUNK` values at a time into one array.
 
     One numpy call over a whole recording holds the GIL throughout (2.7 ms for 15,000 ticks
@@ -112,13 +112,13 @@ class Recording:
     def _rows(self, index: int, width: int) -> np.ndarray:
         if not self._ticks:
             return np.zeros((0, width))
-        return converted(self._column(index), float).reshape(len(self), -1)
+        return _converted(self._column(index), float).reshape(len(self), -1)
 
     @property
     def times(self) -> np.ndarray:
         """The time of each tick (s), as given to :meth:`~.session.Teleop.tick`, (N,); never
         decreasing: a tick dated before the previous one is kept at the previous one's time."""
-        return converted(self._column(0), float)
+        return _converted(self._column(0), float)
 
     @property
     def q(self) -> np.ndarray:
@@ -134,12 +134,12 @@ class Recording:
     def status(self) -> np.ndarray:
         """Each tick's status in words (:attr:`Status.word <pinrate.Status.word>`, as the
         console says it and a servo trajectory keeps it), (N,) strings."""
-        return converted(self._column(3), str)
+        return _converted(self._column(3), str)
 
     @property
     def detail(self) -> np.ndarray:
         """Each tick's reason in words, (N,) strings."""
-        return converted(self._column(4), str)
+        return _converted(self._column(4), str)
 
     def frames(self, fps: float = 30.0) -> np.ndarray:
         """Configurations (F, nq) at ``fps`` frames per second of the recorded time (the

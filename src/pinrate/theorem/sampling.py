@@ -57,7 +57,7 @@ def wilson_interval(successes: int, trials: int, z: float = _Z95) -> tuple[float
     return (max(0.0, centre - half), min(1.0, centre + half))
 
 
-def partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Partition) -> np.ndarray:
+def _partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Partition) -> np.ndarray:
     """Sensor-frame Jacobians restricted to the partition, a stack (N, m + k, n)."""
     index = partition.resolve(robot)
     if configurations.shape[0] == 0:
@@ -94,7 +94,7 @@ def _spectral_radius(robot: Robot, partition: Partition, configurations: np.ndar
     )
     if core is not None:
         return core.spectral_radius_at(configurations)
-    jacobians = partition_jacobians(robot, configurations, partition)
+    jacobians = _partition_jacobians(robot, configurations, partition)
     m, n_arm = index.m, index.arm_columns.size
     return batched.spectral_radius(
         jacobians[:, :m, :n_arm], jacobians[:, :m, n_arm:], jacobians[:, m:, :n_arm], jacobians[:, m:, n_arm:]

@@ -58,7 +58,7 @@ def _basis(direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u, np.cross(direction, u)
 
 
-def lathe(
+def _lathe(
     start: np.ndarray, direction: np.ndarray, profile: list[tuple[float, float]]
 ) -> tuple[np.ndarray, np.ndarray]:
     """A surface of revolution about the line ``start + s * direction`` (unit direction).
@@ -102,13 +102,13 @@ def capsule(start: np.ndarray, end: np.ndarray, radius: float) -> tuple[np.ndarr
     cap_end = [(length + radius * np.sin(t), radius * np.cos(t)) for t in quarter]
     profile = [*cap_start, *cap_end]
     profile[0], profile[-1] = (profile[0][0], 0.0), (profile[-1][0], 0.0)
-    return lathe(start, direction, profile)
+    return _lathe(start, direction, profile)
 
 
 def cylinder(centre: np.ndarray, axis: np.ndarray, length: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
     """A closed cylinder centred on ``centre`` along unit ``axis`` (same frame, metres)."""
     half = length / 2
-    return lathe(centre - half * axis, axis, [(0.0, 0.0), (0.0, radius), (length, radius), (length, 0.0)])
+    return _lathe(centre - half * axis, axis, [(0.0, 0.0), (0.0, radius), (length, radius), (length, 0.0)])
 
 
 def ball(centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
@@ -116,7 +116,7 @@ def ball(centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
     angles = np.linspace(0.0, np.pi, 9)
     profile = [(radius * (1 - np.cos(t)), radius * np.sin(t)) for t in angles]
     profile[0], profile[-1] = (0.0, 0.0), (2 * radius, 0.0)
-    return lathe(centre - np.array([0.0, 0.0, radius]), np.array([0.0, 0.0, 1.0]), profile)
+    return _lathe(centre - np.array([0.0, 0.0, radius]), np.array([0.0, 0.0, 1.0]), profile)
 
 
 def merged(parts: Iterable[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
