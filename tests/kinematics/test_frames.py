@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 import pinrate
+from mimic_urdfs import dual_arm_torso, parallelogram_arm
 from pinrate.robots import example_robot_data_share
 
 SHARE = example_robot_data_share()
@@ -116,3 +117,27 @@ def test_a_zero_range_or_mimic_joint_on_the_chain_stays_out_of_the_partition(tmp
     robot = pinrate.load(path)
     assert robot.hand_joints == ("j1",) and "j1" in robot.tip_chain()
     assert "j1" not in pinrate.Partition.auto(robot).joints
+
+
+def test_a_torso_that_a_side_link_mimics_is_not_a_gripper_joint(tmp_path: Path) -> None:
+    # Issue 24 item 1: an SDA10F's torso was left out and called a "gripper/hand joint".
+    path = tmp_path / "dual.urdf"
+    path.write_text(dual_arm_torso(), encoding="utf-8")
+    robot = pinrate.load(path)
+    assert robot.hand_joints == () and robot.arm_mimics == ("torso_joint_b2",)
+    assert "gripper/hand" not in robot.tip_choice
+    assert robot.tip == "arm_left_tool0"  # two equal arms: the first in model order
+    assert robot.tip_chain()[0] == "torso_joint_b1"
+    partition = pinrate.Partition.auto(robot)
+    assert partition.joints[0] == "torso_joint_b1" and "torso_joint_b2" not in partition.joints
+
+
+def test_mimic_fingers_at_the_end_of_the_chain_are_a_hand(tmp_path: Path) -> None:
+    # Two fingers mimicking one another, a fingertip below one mimicking it: none is named like
+    # a finger, the structure alone says they are a hand; the shoulder's side links are not.
+    path = tmp_path / "arm.urdf"
+    path.write_text(parallelogram_arm(gripper=True), encoding="utf-8")
+    robot = pinrate.load(path)
+    assert set(robot.hand_joints) == {"left_joint", "right_joint", "left_tip_joint"}
+    assert set(robot.arm_mimics) == {"side_a_joint", "side_b_joint"}
+    assert robot.tip == "tool0" and robot.tip_chain() == tuple(f"joint_{i}" for i in range(1, 7))

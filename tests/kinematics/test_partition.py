@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import pinrate
+from mimic_urdfs import parallelogram_arm
 from pinrate import Partition
 
 
@@ -155,3 +156,45 @@ def test_a_partition_naming_a_joint_off_the_tip_chain_is_an_input_error() -> Non
     partition = pinrate.Partition(["joint_lift", "joint_head_pan", "joint_arm_l0"], ["joint_wrist_yaw"])
     with pytest.raises(pinrate.InputError, match="'joint_head_pan' is not on the chain"):
         pinrate.joint_rates(robot, robot.home(), np.zeros(6), partition=partition)
+
+
+def _load_text(tmp_path: Path, text: str) -> pinrate.Robot:
+    path = tmp_path / "robot.urdf"
+    path.write_text(text, encoding="utf-8")
+    return pinrate.load(path)
+
+
+def test_a_shoulder_that_parallelogram_links_mimic_stays_in_the_arm(tmp_path: Path) -> None:
+    # Issue 24 item 1: the IRB 6640's side links mimic joint_2; the shoulder was dropped (3 + 2).
+    robot = _load_text(tmp_path, parallelogram_arm())
+    partition = Partition.auto(robot)
+    assert partition.arm == ("joint_1", "joint_2", "joint_3")
+    assert partition.wrist == ("joint_4", "joint_5", "joint_6")
+    assert robot.tip == "tool0" and "joint_2" not in robot.hand_joints
+    assert set(robot.arm_mimics) == {"side_a_joint", "side_b_joint"}
+    assert "joint_2" not in robot.tip_choice and "gripper/hand" not in robot.tip_choice
+
+    # The shoulder serves: a target 0.2 rad away on joint_2 alone is reached.
+    q_target = robot.home()
+    q_target[robot.model.joints[robot.joint_id("joint_2")].idx_q] += 0.2
+    run = pinrate.servo(robot, robot.home(), robot.pose(q_target))
+    assert run.converged, run.reason
+
+    # A teleop step along the sensor's x moves the tip along it (robot.pose, not the Jacobian).
+    home = robot.home()
+    step = pinrate.Controller(robot).step(home, [0.05, 0, 0, 0, 0, 0])
+    before, after = robot.pose(home), robot.pose(step.q)
+    moved = after[:3, 3] - before[:3, 3]
+    commanded = before[:3, :3] @ np.array([1.0, 0.0, 0.0])  # the sensor is the tip here
+    assert robot.sensor == robot.tip and np.linalg.norm(moved) > 1e-4
+    angle = np.degrees(np.arccos(np.clip(moved @ commanded / np.linalg.norm(moved), -1.0, 1.0)))
+    assert angle < 1.0 and step.status is pinrate.Status.OK, (angle, step.status, step.detail)
+
+
+def test_a_mimic_gripper_stays_out_while_the_mimicked_shoulder_stays_in(tmp_path: Path) -> None:
+    # Fingers that mimic one another at the end of the chain (one below the other) are a hand.
+    robot = _load_text(tmp_path, parallelogram_arm(gripper=True))
+    assert set(robot.hand_joints) == {"left_joint", "right_joint", "left_tip_joint"}
+    assert robot.tip == "tool0"
+    partition = Partition.auto(robot)
+    assert partition.joints == tuple(f"joint_{i}" for i in range(1, 7))

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import pinocchio as pin
@@ -54,19 +54,42 @@ HAND_JOINT_WORDS = ("finger", "gripper", "jaw", "thumb", "knuckle", "claw", "pal
 
 @dataclass(frozen=True)
 class TipChoice:
-    """The default tip of a model and why: its frame, the arm's last joint, the joints left out."""
+    """The default tip of a model and why: its frame, the joints left out of the arm (gripper
+    and hand joints; mimic joints that follow an arm joint, :func:`arm_mimics`)."""
 
     frame_id: int
     reason: str
     hand_joints: tuple[str, ...]
+    arm_mimics: tuple[str, ...] = ()
+
+
+def mimic_groups(model: pin.Model, mimic: Mapping[str, str] | None) -> list[set[int]]:
+    """Joints coupled by ``<mimic>`` (joint -> the joint it mimics), as sets of joint ids: a
+    mimicked joint with every joint that mimics it, directly or through another mimic."""
+    groups: list[set[int]] = []
+    for follower, leader in (mimic or {}).items():
+        if not (model.existJointName(follower) and model.existJointName(leader)):
+            continue
+        pair = {int(model.getJointId(follower)), int(model.getJointId(leader))}
+        touching = [group for group in groups if group & pair]
+        merged = pair.union(*touching)
+        groups = [group for group in groups if not group & pair] + [merged]
+    return groups
 
 
 def hand_joints(model: pin.Model, mimic: Mapping[str, str] | None = None) -> tuple[str, ...]:
     """Moving joints of grippers and hands, which are not part of the arm (contract v2):
-    mimic joints and the joints they mimic, joints whose range is zero, joints named like a
-    hand part (:data:`HAND_JOINT_WORDS`), and prismatic joints with no arm joint below them.
-    Empty when that would leave no joint at all (a hand on its own is its own arm)."""
-    mimic = dict(mimic or {})
+    joints whose range is zero, joints named like a hand part (:data:`HAND_JOINT_WORDS`), and,
+    at the end of the chain, prismatic joints and mimic groups (a mimicked joint and the joints
+    that mimic it).
+
+    At the end of the chain: no moving joint of the arm below any joint of the group (only
+    the group's own joints and other hand joints; repeated, as one finger may sit below
+    another). A group with arm joints below it is part of the arm's kinematics, not a hand:
+    its mimicked joint stays in the arm (an IRB 6640's shoulder with its parallelogram links,
+    an SDA10F's torso) and the joints that mimic it follow it (:func:`arm_mimics`).
+    Empty when that would leave no joint at all (a hand on its own is its own arm).
+    """
     moving = [j for j in range(1, model.njoints) if model.joints[j].nv > 0]
     names = {j: model.names[j] for j in moving}
     hand = set()
@@ -75,27 +98,36 @@ def hand_joints(model: pin.Model, mimic: Mapping[str, str] | None = None) -> tup
         words = set(re.split(r"[^a-z0-9]+", name.lower()))
         lower = model.lowerPositionLimit[joint_model.idx_q : joint_model.idx_q + joint_model.nq]
         upper = model.upperPositionLimit[joint_model.idx_q : joint_model.idx_q + joint_model.nq]
-        if (
-            name in mimic
-            or name in mimic.values()
-            or (joint_model.nq == 1 and float(upper[0] - lower[0]) <= 0.0)
-            or any(_names_part(word, name, words) for word in HAND_JOINT_WORDS)
+        if (joint_model.nq == 1 and float(upper[0] - lower[0]) <= 0.0) or any(
+            _names_part(word, name, words) for word in HAND_JOINT_WORDS
         ):
             hand.add(joint_id)
-    # Prismatic joints at the end of a chain (fingers), repeated: one may sit below another.
+    prismatic = [{j} for j in moving if model.joints[j].shortname().startswith("JointModelP")]
+    candidates = [group & set(moving) for group in mimic_groups(model, mimic)] + prismatic
     changed = True
     while changed:
         changed = False
-        for joint_id in moving:
-            if joint_id in hand or not model.joints[joint_id].shortname().startswith("JointModelP"):
+        for group in candidates:
+            if group <= hand:
                 continue
-            below = [j for j in model.subtrees[joint_id] if j != joint_id and j in names and j not in hand]
+            below = {j for joint in group for j in model.subtrees[joint] if j in names} - group - hand
             if not below:
-                hand.add(joint_id)
+                hand |= group
                 changed = True
     if len(hand) == len(moving):
         return ()
     return tuple(names[j] for j in moving if j in hand)
+
+
+def arm_mimics(model: pin.Model, mimic: Mapping[str, str] | None, hand: Sequence[str]) -> tuple[str, ...]:
+    """Mimic joints whose group is part of the arm (not in ``hand``): they follow the joint
+    they mimic, so they are never an arm or wrist joint of their own (contract v2)."""
+    left_out = set(hand)
+    return tuple(
+        follower
+        for follower, leader in (mimic or {}).items()
+        if model.existJointName(follower) and model.existJointName(leader) and follower not in left_out
+    )
 
 
 def _names_part(word: str, name: str, words: set[str]) -> bool:
@@ -120,15 +152,21 @@ def _tool_rank(name: str) -> int:
 def default_tip_frame(model: pin.Model, mimic: Mapping[str, str] | None = None) -> TipChoice:
     """The tool frame of the main arm (contract v2, "Robot defaults for any URDF").
 
-    The arm is the moving joints less the hand joints (:func:`hand_joints`); the main arm ends
-    at the arm joint with the most arm joints in its support (ties: model order). Among the
-    frames fixed to that joint, a name like a tool centre wins (:data:`TOOL_NAMES`, best
-    first), then the deepest frame, links before joint frames.
+    The arm is the moving joints less the hand joints (:func:`hand_joints`) and the mimic
+    joints that follow an arm joint (:func:`arm_mimics`); the main arm ends at the arm joint
+    with the most arm joints in its support (ties: model order). Among the frames fixed to
+    that joint, a name like a tool centre wins (:data:`TOOL_NAMES`, best first), then the
+    deepest frame, links before joint frames.
     """
     left_out = set(hand_joints(model, mimic))
-    arm = [j for j in range(1, model.njoints) if model.joints[j].nv > 0 and model.names[j] not in left_out]
+    followers = arm_mimics(model, mimic, tuple(left_out))
+    arm = [
+        j
+        for j in range(1, model.njoints)
+        if model.joints[j].nv > 0 and model.names[j] not in left_out and model.names[j] not in followers
+    ]
     if not arm:
-        return TipChoice(len(model.frames) - 1, "the last frame (no moving joint)", ())
+        return TipChoice(len(model.frames) - 1, "the last frame (no moving joint)", (), followers)
 
     def arm_depth(joint_id: int) -> int:
         return sum(1 for j in model.supports[joint_id] if j in arm)
@@ -158,4 +196,6 @@ def default_tip_frame(model: pin.Model, mimic: Mapping[str, str] | None = None) 
     if left_out:
         shown = ", ".join(sorted(left_out)[:6]) + (" ..." if len(left_out) > 6 else "")
         reason += f" (gripper/hand joints left out: {shown})"
-    return TipChoice(best, reason, tuple(sorted(left_out)))
+    if followers:
+        reason += f" (mimic joints following an arm joint: {', '.join(sorted(followers))})"
+    return TipChoice(best, reason, tuple(sorted(left_out)), followers)

@@ -74,8 +74,10 @@ class Robot:
         reference_configurations: named configurations (from the SRDF, plus ``"home"``).
         home_choice: where :meth:`home` comes from (a reference, an SRDF state, a search, neutral).
         srdf_path: the SRDF read with the URDF (its disabled collision pairs, its poses), or None.
-        hand_joints: the gripper and hand joints (mimic, mimicked, zero-range) that the default
-            tip and the automatic partition leave out.
+        hand_joints: the gripper and hand joints (zero-range, named like a hand part, mimic
+            groups and prismatic joints at the end of the chain) that the default tip and the
+            automatic partition leave out (:mod:`.frames`).
+        arm_mimics: the mimic joints that follow an arm joint (parallelogram links), left out too.
     """
 
     def __init__(
@@ -115,9 +117,8 @@ class Robot:
         self._has_unit_pairs = model.nq != model.nv
         if not self.joint_names:
             raise LoadError(f"robot {self.name!r} has no moving joint: every joint is fixed, nothing to control")
-
         choice = default_tip_frame(model, mimic)
-        self.hand_joints: tuple[str, ...] = choice.hand_joints
+        self.hand_joints, self.arm_mimics = choice.hand_joints, choice.arm_mimics
         if tip is None:
             self.tip_id = choice.frame_id
             self.tip_choice = choice.reason
@@ -133,7 +134,6 @@ class Robot:
             )
         self.sensor_id = self.tip_id if sensor is None else resolve_frame(model, sensor, role="sensor", robot=self.name)
         self.sensor = model.frames[self.sensor_id].name
-
         self._joint_ids = {model.names[j]: j for j in range(1, model.njoints)}
         self.reference_configurations: dict[str, np.ndarray] = {
             key: np.array(value, dtype=float) for key, value in (reference_configurations or {}).items()

@@ -221,8 +221,10 @@ class Partition:
         """The default partition of ``robot`` (cached on the robot).
 
         Only joints of the tip's chain whose Jacobian column is non-zero somewhere take part,
-        less the gripper and hand joints (mimic, mimicked, zero-range; :attr:`Robot.hand_joints`)
-        and less multi-DOF joints (a ``planar`` or ``floating`` base: the paper's arm and wrist
+        less the gripper and hand joints (zero-range, mimic groups at the end of the chain;
+        :attr:`Robot.hand_joints`), less the mimic joints that follow an arm joint
+        (:attr:`Robot.arm_mimics`: a joint that parallelogram links mimic stays, its links do
+        not), and less multi-DOF joints (a ``planar`` or ``floating`` base: the paper's arm and wrist
         are the manipulator's 1-DOF joints; a :class:`Partition` naming one includes it);
         twist components whose rows are zero at every sampled configuration are dropped.
         With n joints, m linear and k angular components, the wrist is the last
@@ -241,6 +243,7 @@ class Partition:
             j
             for j in robot.tip_chain()
             if j not in robot.hand_joints
+            and j not in robot.arm_mimics
             and len(robot.velocity_indices(j)) == 1
             and any(moving[:, c].any() for c in robot.velocity_indices(j))
         ]

@@ -269,7 +269,7 @@ def robot_from_urdf(
 
 def _mimic_joints(root: ET.Element) -> dict[str, str]:
     """Joint -> the joint it mimics, from the URDF's ``<mimic joint=...>`` elements (Pinocchio
-    models them as independent joints; pinrate leaves both out of the arm)."""
+    models them as independent joints; :func:`.frames.hand_joints` tells a hand's from an arm's)."""
     pairs = {}
     for joint in root.findall("joint"):
         mimic = joint.find("mimic")
