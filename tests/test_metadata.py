@@ -46,8 +46,9 @@ def imported_top_level_modules() -> set[str]:
     return modules - set(sys.stdlib_module_names) - {"pinrate", "pinrate_core", "__future__"}
 
 
-OPTIONAL = {"dask", "distributed"}
-"""Imported only behind ``pip install 'pinrate[dask]'`` (an error naming the extra otherwise)."""
+OPTIONAL = {"dask", "distributed", "xacro", "xacrodoc"}
+"""Imported only behind ``pip install 'pinrate[dask]'`` and ``'pinrate[xacro]'`` (an error naming
+the extra otherwise)."""
 
 
 def test_one_version() -> None:

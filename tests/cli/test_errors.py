@@ -48,7 +48,10 @@ def cases(tmp: Path) -> list[tuple[list[str], str]]:
         (["demo", "ur5", "--q0", "0", "1"], "--q0 takes 6 values"),
         (["demo", "ur5", "--q0", "0", "0", "0", "0", "0", "1e9"], "physical bound"),
         (["demo", "ur55"], "unknown robot name 'ur55'"),
-        (["demo", str(tmp / "arm.urdf.xacro")], "expand it first"),
+        (["demo", str(tmp / "arm.urdf.xacro")], "arm.urdf.xacro: the URDF has no <link>"),  # expanded, then checked
+        (["demo", str(tmp / "arm.urdf.xacro"), "--xacro-arg", "l:=2"], "xacro argument 'l' is not declared"),
+        (["demo", str(tmp / "arm.urdf.xacro"), "--xacro-arg", "l=2"], "argument --xacro-arg: expected NAME:=VALUE"),
+        (["demo", "ur5", "--xacro-arg", "l:=2"], "xacro_args are for a .xacro file"),
         (["demo", str(tmp / "missing.urdf")], "not found"),
         (["demo", str(tmp)], "not a file"),
         (["demo", str(tmp / "afile")], "malformed XML"),

@@ -206,13 +206,13 @@ def test_a_chain_deep_enough_to_crash_the_parser_is_refused(tmp_path: Path) -> N
     assert f"limit of {MAX_DEPTH} links in one chain" in result.stdout
 
 
-def test_xacro_files_are_refused_with_the_command_to_expand_them(tmp_path: Path) -> None:
+def test_xacro_text_in_a_urdf_file_is_refused_with_what_to_do(tmp_path: Path) -> None:
+    """A ``.xacro`` file is expanded (tests/robots/test_xacro.py); xacro elements in a ``.urdf`` are refused."""
     macro = '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:property name="l" value="1"/></robot>'
-    for name in ("arm.urdf.xacro", "arm.urdf"):
-        path = tmp_path / name
-        path.write_text(macro, encoding="utf-8")
-        with pytest.raises(pinrate.LoadError, match=r"xacro file.*expand it first"):
-            pinrate.load(path)
+    path = tmp_path / "arm.urdf"
+    path.write_text(macro, encoding="utf-8")
+    with pytest.raises(pinrate.LoadError, match=r"xacro file.*name it robot\.urdf\.xacro.*expand it first"):
+        pinrate.load(path)
     undeclared = tmp_path / "undeclared.urdf"
     undeclared.write_text('<robot name="r"><xacro:include filename="x"/></robot>', encoding="utf-8")
     with pytest.raises(pinrate.LoadError, match="expand it first"):

@@ -68,6 +68,17 @@ def finite(text: str) -> float:
     return value
 
 
+def xacro_argument(text: str) -> tuple[str, str]:
+    """An argparse type: ``NAME:=VALUE``, a xacro:arg's value (as ``xacro file name:=value``)."""
+    name, separator, value = text.partition(":=")
+    if not separator or not name.strip() or name != name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME:=VALUE (e.g. ur_type:=ur10e), got {text!r}")
+    return name, value
+
+
+xacro_argument.__name__ = "NAME:=VALUE"
+
+
 def warn(message: str) -> None:
     """One line ``pinrate: warning: ...`` on stderr."""
     print(f"pinrate: warning: {message}", file=sys.stderr, flush=True)

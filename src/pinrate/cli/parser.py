@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from .arguments import Parser, count, finite, positive, within
+from .arguments import Parser, count, finite, positive, within, xacro_argument
 
 ALGORITHMS = ("exact", "schur", "mca1", "mca2", "mca3", "dls")
 """A copy of :data:`pinrate.solvers.registry.ALGORITHMS`."""
@@ -46,13 +46,23 @@ DEMO_MAX_STEPS = 6000
 def add_robot_arguments(parser: argparse.ArgumentParser, tip_help: str, sensor_help: str) -> None:
     """The robot and its frames, shared by ``analyze``, ``demo`` and ``teleop`` (loaded by
     :func:`.robot_arguments.load_robot`)."""
-    parser.add_argument("robot", help="a name from `pinrate list` or a URDF path")
+    parser.add_argument(
+        "robot", help="a name from `pinrate list`, a URDF path or a .xacro path (expanded; needs pinrate[xacro])"
+    )
     parser.add_argument("--tip", help=tip_help)
     parser.add_argument("--sensor", help=sensor_help)
     parser.add_argument(
         "--max-joints",
         type=count(1),
         help=f"refuse URDFs with more moving joints (default {MAX_JOINTS}, or $PINRATE_MAX_JOINTS)",
+    )
+    parser.add_argument(
+        "--xacro-arg",
+        action="append",
+        type=xacro_argument,
+        default=[],
+        metavar="NAME:=VALUE",
+        help="a .xacro file's xacro:arg, e.g. ur_type:=ur10e (repeatable; the last value of a name wins)",
     )
 
 

@@ -1,5 +1,5 @@
 """The robot the command line names, shared by ``demo``, ``analyze`` and ``teleop``: ``ROBOT``
-with ``--tip``, ``--sensor`` and ``--max-joints`` loaded into a :class:`~pinrate.Robot`, and
+with ``--tip``, ``--sensor``, ``--max-joints`` and ``--xacro-arg`` loaded into a :class:`~pinrate.Robot`, and
 ``--q0`` checked into a start configuration (the parser declares them, with nothing heavy
 loaded: :func:`.parser.add_robot_arguments`).
 
@@ -19,11 +19,14 @@ from ..robots import load
 
 
 def load_robot(args: argparse.Namespace) -> Robot:
-    """The robot of ``args.robot``, ``--tip``, ``--sensor`` and ``--max-joints``; says which tip it chose."""
+    """The robot of ``args.robot``, ``--tip``, ``--sensor``, ``--max-joints`` and ``--xacro-arg``;
+    says which tip it chose."""
     for option, frame in (("--tip", args.tip), ("--sensor", args.sensor)):
         if frame is not None and not frame.strip():
             raise InputError(f"{option} must name a frame, got {frame!r}")
-    robot = load(args.robot, tip=args.tip, sensor=args.sensor, max_joints=args.max_joints)
+    robot = load(
+        args.robot, tip=args.tip, sensor=args.sensor, max_joints=args.max_joints, xacro_args=dict(args.xacro_arg)
+    )
     if robot.tip_choice != "given":
         print(f"tip        {robot.tip} ({robot.tip_choice}; --tip to choose another)")
     return robot

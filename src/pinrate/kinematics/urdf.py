@@ -44,15 +44,13 @@ _ANY_DECLARATION = re.compile(r"^\s*<\?xml[^>]*\?>")
 
 
 def read_urdf(path: Path) -> tuple[str, str]:
-    """The text of a URDF file and the encoding it was read in; LoadError naming the path
-    when it is missing or a folder, a ``.xacro``, or not decodable in its declared encoding."""
+    """The text of a URDF (or xacro) file and the encoding it was read in; LoadError naming
+    the path when it is missing or a folder, or not decodable in its declared encoding."""
     try:
         if not path.exists():
             raise LoadError(f"URDF file not found: {path}")
         if not path.is_file():
             raise LoadError(f"URDF path is not a file: {path}")
-        if path.name.endswith(".xacro"):
-            raise LoadError(_XACRO_HINT.format(label=path))
         data = path.read_bytes()
     except OSError as error:  # too long a name, no permission, a device that fails
         raise LoadError(f"URDF file cannot be read: {str(path)[:200]} ({error.strerror or error})") from None
@@ -96,8 +94,8 @@ def _decode_xml(data: bytes, label: str) -> tuple[str, str]:
 
 
 _XACRO_HINT = (
-    "{label}: this is a xacro file, not a URDF: expand it first, e.g. `xacro robot.urdf.xacro > robot.urdf` "
-    "(ROS's xacro, also `pip install xacro`), and load the result"
+    "{label}: this is a xacro file, not a URDF: name it robot.urdf.xacro (pinrate expands a .xacro file, "
+    "with pinrate[xacro]), or expand it first and load the result"
 )
 
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import os
 import re
+import xml.etree.ElementTree as ET
 import xml.parsers.expat
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -37,6 +38,33 @@ def ros_package_dirs() -> list[str]:
     ros = [folder for folder in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if folder]
     ament = [f"{folder}/share" for folder in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if folder]
     return ros + ament
+
+
+_PACKAGE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
+
+
+def find_package(name: str, search_dirs: Sequence[str]) -> str | None:
+    """The folder of ROS package ``name`` (``package://name/...``, xacro's ``$(find name)``), or
+    None: the first of ``search_dirs`` that is the package (its ``package.xml`` names it; without
+    one, the folder's own name is ``name``) or holds a folder ``name`` (``ROS_PACKAGE_PATH/name``,
+    ``AMENT_PREFIX_PATH/share/name``). ``.``, ``..`` and names with a separator are no package."""
+    if not _PACKAGE_NAME.fullmatch(name) or name in (".", ".."):
+        return None
+    for folder in search_dirs:
+        if os.path.isdir(folder) and _package_name(folder) == name:
+            return folder
+        if os.path.isdir(os.path.join(folder, name)):
+            return os.path.join(folder, name)
+    return None
+
+
+def _package_name(folder: str) -> str:
+    """The ``<name>`` of the folder's ``package.xml``; the folder's name without a readable one."""
+    try:
+        name = ET.parse(os.path.join(folder, "package.xml")).getroot().findtext("name")
+    except (OSError, ET.ParseError):
+        name = None
+    return name.strip() if name else os.path.basename(os.path.normpath(folder))
 
 
 def mesh_roots(search_dirs: Sequence[str]) -> list[str]:
@@ -137,7 +165,11 @@ def _resolve(uri: str, search_dirs: Sequence[str], roots: Sequence[str]) -> tupl
     """The real path of the file ``uri`` names inside ``roots``, or None and why not."""
     scheme, separator, rest = uri.partition("://")
     if separator and scheme in ("package", "model"):
+        package, _, inside = rest.partition("/")
+        found = find_package(package, search_dirs)
         candidates = [f"{folder}/{rest}" for folder in search_dirs]
+        if found is not None:  # the package whose package.xml names it, first
+            candidates.insert(0, f"{found}/{inside}")
     elif separator and scheme == "file":
         candidates = [rest]
     elif separator:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from ..checks import check_count
@@ -13,6 +13,7 @@ from ..kinematics.urdf import read_urdf, robot_from_urdf
 from ..kinematics.urdf_meshes import ros_package_dirs
 from . import parametric
 from .catalog import EXAMPLE_ROBOTS, CatalogEntry, example_robot_data_share, example_robot_path
+from .xacro_files import checked_arguments, expand_xacro, is_xacro, srdf_beside
 
 
 def known_names() -> list[str]:
@@ -27,12 +28,16 @@ def load(
     sensor: str | None = None,
     max_joints: int | None = None,
     package_dirs: Sequence[str | os.PathLike[str]] = (),
+    xacro_args: Mapping[str, str] | None = None,
 ) -> Robot:
-    """Load a robot from a URDF path, a papers'-robot name or an example-robot-data name.
+    """Load a robot from a URDF or xacro path, a papers'-robot name or an example-robot-data name.
 
     Args:
-        source: a path to a ``.urdf`` file; or a name from :func:`known_names`
-            (the papers' robots such as ``"scara"``, and ``"ur5"``, ``"panda"``, ...).
+        source: a path to a ``.urdf`` file, or to a ``.xacro`` file (``robot.urdf.xacro``,
+            ``robot.xacro``), expanded first by xacrodoc (``pip install 'pinrate[xacro]'``);
+            or a name from :func:`known_names` (the papers' robots such as ``"scara"``, and
+            ``"ur5"``, ``"panda"``, ...). A URDF's home comes from the SRDF beside it with the
+            same stem (``robot.srdf`` for ``robot.urdf``, ``robot.urdf.xacro`` and ``robot.xacro``).
         tip: the frame whose origin is the TCP (a link, joint or fixed frame; a name that is
             both a link and a joint means the link). Default: the name table's tip; for any
             other URDF, the tool frame of the main arm, gripper and hand joints left out
@@ -47,13 +52,20 @@ def load(
             ROS_PACKAGE_PATH's and AMENT_PREFIX_PATH's, as Pinocchio adds them). A mesh is read
             only from inside these folders (the filesystem's root excepted), once ``..`` and
             symbolic links are resolved; any other mesh is left out with a warning naming it
-            (:mod:`pinrate.kinematics.urdf_meshes`).
+            (:mod:`pinrate.kinematics.urdf_meshes`). The same folders answer a xacro file's
+            ``$(find pkg)``: the first that is the package (its ``package.xml`` names it, or
+            without one its name is ``pkg``) or holds a folder ``pkg``.
+        xacro_args: a ``.xacro`` file's ``xacro:arg`` values, ``{"name": "value"}`` (as
+            ``xacro robot.urdf.xacro name:=value``); each must be declared by the file.
 
     Raises:
-        LoadError: missing file, malformed XML, not a URDF, a ``.xacro``, a structure fault
-            (named joint or link), too many joints, no moving joint, unknown robot name.
+        LoadError: missing file, malformed XML, not a URDF, a xacro file that cannot be
+            expanded (xacrodoc not installed, an undeclared argument, a package not found:
+            the message says which), a structure fault (named joint or link), too many
+            joints, no moving joint, unknown robot name.
         FrameError: unknown tip or sensor frame (the message lists the frames).
-        InputError: a tip or sensor that is not a name ("" is not the default: None is).
+        InputError: a tip or sensor that is not a name ("" is not the default: None is);
+            ``xacro_args`` for a source that is not a ``.xacro`` file.
     """
     if max_joints is not None:
         check_count(max_joints, "max_joints", minimum=1)
@@ -65,7 +77,13 @@ def load(
             path = Path(source).expanduser().resolve()
         except (OSError, RuntimeError, ValueError) as error:  # a NUL byte, ~unknownuser, a loop
             raise LoadError(f"URDF path {str(source)[:200]!r} cannot be resolved: {error}") from None
+        search_dirs = [*_checked_dirs(package_dirs), *_package_dirs_for(path), *ros_package_dirs()]
+        arguments = checked_arguments({} if xacro_args is None else xacro_args)
+        if arguments and not is_xacro(path):
+            raise InputError(f"xacro_args are for a .xacro file, and {path.name!r} is not one")
         text, encoding = read_urdf(path)
+        if is_xacro(path):
+            text, encoding = expand_xacro(path, text, arguments, search_dirs), "xacro"
         return robot_from_urdf(
             text,
             label=str(path),
@@ -73,12 +91,14 @@ def load(
             sensor=sensor,
             # urdfdom reads files as UTF-8: the visuals of a file in another encoding come from the text
             urdf_path=path if encoding in ("utf-8", "ascii") else None,
-            package_dirs=[*_checked_dirs(package_dirs), *_package_dirs_for(path), *ros_package_dirs()],
+            package_dirs=search_dirs,
             max_joints=max_joints,
-            srdf_path=path.with_suffix(".srdf"),
+            srdf_path=srdf_beside(path),
             search_home=True,
             confine=True,
         )
+    if xacro_args:
+        raise InputError(f"xacro_args are for a .xacro file, and {source!r} is a robot name")
     if not isinstance(source, str):
         raise InputError(f"source must be a URDF path or a robot name, not {type(source).__name__}")
     if source in parametric.ROBOT_NAMES:
