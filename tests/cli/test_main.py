@@ -114,3 +114,8 @@ def test_a_replay_that_cannot_be_written_is_one_error_line(capsys: pytest.Captur
     said = "pinrate: error: --record '/dev/full' exists and is not a regular file"
     assert captured.err.strip().splitlines() == [said]
     assert "converged" not in captured.out and "segment" not in captured.out  # nothing ran
+
+
+def test_python_dash_m_pinrate_is_the_command_line() -> None:
+    ran = subprocess.run([sys.executable, "-m", "pinrate", "--version"], capture_output=True, text=True, timeout=60)
+    assert ran.returncode == 0 and ran.stdout.startswith("pinrate ") and not ran.stderr
