@@ -290,7 +290,9 @@ def test_the_rates_said_are_the_rates_applied_and_within_every_limit(name: str) 
             moved = (step.q - q) / controller.dt
             for joint in robot.model.joints[1:]:
                 if joint.nq == 1:
-                    rounding = 4 * np.finfo(float).eps * max(1.0, abs(q[joint.idx_q])) / controller.dt
+                    # q + v dt rounds to an ulp of the larger of |q| and |q_next|, as their difference
+                    scale = max(1.0, abs(q[joint.idx_q]), abs(step.q[joint.idx_q]))
+                    rounding = 4 * np.finfo(float).eps * scale / controller.dt
                     assert abs(moved[joint.idx_q] - step.joint_rates[joint.idx_v]) <= rounding, (name, step.detail)
             assert np.abs(step.joint_rates).max() <= speed * (1 + 1e-12)
             q = step.q
