@@ -155,7 +155,7 @@ def as_pose(target: object) -> pin.SE3:
 def check_output_folder(path: str | os.PathLike[str], what: str) -> Path:
     """A folder to write into, created if missing; InputError naming ``what`` when the path
     is a file, cannot be created or is not writable."""
-    folder = _as_path(path, what)
+    folder = as_path(path, what)
     if folder.exists() and not folder.is_dir():
         raise InputError(f"{what} {str(folder)!r} exists and is not a folder")
     try:
@@ -170,7 +170,7 @@ def check_output_folder(path: str | os.PathLike[str], what: str) -> Path:
 def check_output_file(path: str | os.PathLike[str], what: str) -> Path:
     """A file path to write (an existing file is replaced); InputError naming ``what`` when it
     is a folder, its folder is missing, or either is not writable."""
-    target = _as_path(path, what)
+    target = as_path(path, what)
     if target.is_dir():
         raise InputError(f"{what} {str(target)!r} is a folder; give a file name")
     folder = target.parent
@@ -181,7 +181,9 @@ def check_output_file(path: str | os.PathLike[str], what: str) -> Path:
     return target
 
 
-def _as_path(path: object, what: str) -> Path:
+def as_path(path: object, what: str) -> Path:
+    """``path`` as a :class:`~pathlib.Path` (``~`` expanded); InputError naming ``what`` when it
+    is not a path (not a string or an os.PathLike, or empty)."""
     if not isinstance(path, str | os.PathLike) or str(path) == "":
         raise InputError(f"{what} must be a path, got {path!r}")
     try:

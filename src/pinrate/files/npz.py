@@ -26,7 +26,7 @@ from typing import IO
 
 import numpy as np
 
-from ..checks import PHYSICAL_BOUND
+from ..checks import PHYSICAL_BOUND, as_path
 from ..errors import InputError
 from .npz_members import (
     CORRUPT,
@@ -38,7 +38,6 @@ from .npz_members import (
     read_exactly,
     read_members,
     reason,
-    source_path,
 )
 
 MAX_LOAD_BYTES = 2 << 30
@@ -234,7 +233,7 @@ def open_npz(path: str | os.PathLike[str], what: str, *, max_bytes: int = MAX_LO
     if isinstance(max_bytes, bool) or not isinstance(max_bytes, int) or max_bytes < 0:
         raise InputError(f"max_bytes must be a non-negative integer, got {max_bytes!r}")
     stream = open_regular(path, what)
-    source = source_path(path, what)
+    source = as_path(path, what)
     where = named(source, what)
     try:
         size = os.fstat(stream.fileno()).st_size

@@ -39,6 +39,7 @@ from typing import IO
 
 import numpy as np
 
+from ..checks import as_path
 from ..errors import InputError
 
 STR_OBJECT_BYTES = 80
@@ -112,7 +113,7 @@ def open_regular(path: str | os.PathLike[str], what: str) -> IO[bytes]:
     """``path`` opened for reading in binary, if it is a regular file; InputError naming
     ``what`` and the path otherwise (missing, unreadable, a folder, a FIFO, a device, a
     socket). It is opened non-blocking, so a FIFO put there after the check cannot block."""
-    source = source_path(path, what)
+    source = as_path(path, what)
     where = named(source, what)
     try:
         status = os.stat(source)
@@ -139,17 +140,6 @@ def _not_regular(mode: int) -> str:
         return "is a folder, not a file"
     kind = "a FIFO" if stat.S_ISFIFO(mode) else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "a socket"
     return f"is not a regular file ({kind})"
-
-
-def source_path(path: object, what: str) -> Path:
-    """``path`` as a :class:`~pathlib.Path` (``~`` expanded); InputError naming ``what`` when it
-    is not a path (not a string or an os.PathLike, or empty)."""
-    if not isinstance(path, str | os.PathLike) or str(path) == "":
-        raise InputError(f"{what} must be a path, got {path!r}")
-    try:
-        return Path(path).expanduser()
-    except RuntimeError as error:  # ~unknownuser
-        raise InputError(f"{what} {str(path)!r}: {error}") from None
 
 
 def named(path: Path, what: str) -> str:
@@ -278,5 +268,4 @@ __all__ = [
     "read_exactly",
     "read_members",
     "reason",
-    "source_path",
 ]
