@@ -10,8 +10,10 @@ module of its own, in this order:
    times the pose error, position error R_s^T (p_target - p_tip) and rotation error
    R_s^T log3(R_target R_tip^T); a :class:`JointJog` or an :class:`Uncoupled` command
    names joint rates instead (:mod:`.joint_space`, :mod:`.uncoupled`);
-3. **bound**: the linear and the angular parts are each scaled down, direction kept, to at
-   most ``max_linear_speed`` and ``max_angular_speed``;
+3. **bound**: the whole twist is scaled down by one factor, the largest that keeps its
+   linear part within ``max_linear_speed`` and its angular part within ``max_angular_speed``
+   (the commanded screw keeps its direction); what the partition cannot make of it is said
+   (:mod:`.reach`);
 4. **plan**: where a cheap conditioning bound says the step may be in the singular region,
    the wrist rule and the ``singularity=`` strategy decide how it solves
    (:mod:`.singularity`: one module per strategy); Barker's auxiliary elbow takes the step

@@ -23,7 +23,8 @@ from .context import StepContext
 from .observation import Observation
 
 REACH_TOLERANCE = 1e-6
-"""Relative residual (scaled norms) above which a twist counts as out of reach: a twist the
+"""Relative residual, ‖r‖ / ‖twist‖ (m/s and rad/s in one norm, as the exact algorithm's
+least squares weighs them), above which a twist counts as out of reach: a twist the
 joints can make leaves a least-squares residual of rounding, about κ(J) × 1e-16, far below
 it even near the singular region (κ ≤ 1 / 1e-4); a twist they cannot make misses by its
 component outside J's range, which no rounding produces."""
