@@ -491,3 +491,16 @@ def python_opens() -> Iterator[list[str]]:
         yield _OPENED
     finally:
         _OPENED = None
+
+
+TRIANGLE_STL = """solid t
+facet normal 0 0 1
+outer loop
+vertex 0 0 0
+vertex 0.1 0 0
+vertex 0 0.1 0
+endloop
+endfacet
+endsolid t
+"""
+"""One triangle as an ASCII STL file: the smallest mesh Pinocchio reads (tests that write meshes)."""

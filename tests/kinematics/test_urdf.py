@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import pinrate
+from support import TRIANGLE_STL
 
 PLAIN = """<robot name="two">
 <link name="a"/><link name="b"/><link name="c"/>
@@ -57,22 +58,10 @@ def test_structure_checks_still_see_a_namespaced_file(tmp_path: Path) -> None:
         pinrate.load(path)
 
 
-TRIANGLE = """solid t
-facet normal 0 0 1
-outer loop
-vertex 0 0 0
-vertex 0.1 0 0
-vertex 0 0.1 0
-endloop
-endfacet
-endsolid t
-"""
-
-
 def test_package_dirs_resolve_package_uris_outside_the_urdfs_folders(tmp_path: Path) -> None:
     meshes = tmp_path / "elsewhere" / "mypkg" / "meshes"
     meshes.mkdir(parents=True)
-    (meshes / "tri.stl").write_text(TRIANGLE, encoding="ascii")
+    (meshes / "tri.stl").write_text(TRIANGLE_STL, encoding="ascii")
     (tmp_path / "robot").mkdir()
     path = tmp_path / "robot" / "arm.urdf"
     path.write_text(

@@ -12,20 +12,10 @@ import pytest
 
 import pinrate
 from pinrate.viewer import Viewer
-from support import files_opened_in, python_opens
+from support import TRIANGLE_STL, files_opened_in, python_opens
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="inotify: Linux")
 
-STL = """solid t
-facet normal 0 0 1
-outer loop
-vertex 0 0 0
-vertex 0.1 0 0
-vertex 0 0.1 0
-endloop
-endfacet
-endsolid t
-"""
 
 URDF = """<robot name="r">
 <link name="base"><visual><geometry><mesh filename="meshes/base.stl"/></geometry></visual></link>
@@ -51,12 +41,12 @@ def test_meshes_are_read_only_inside_the_urdfs_folders(tmp_path: Path) -> None:
     # secret beside them, /etc/passwd and /etc/shadow are outside.
     secret = tmp_path / "secret"
     secret.mkdir()
-    (secret / "secret.stl").write_text(STL, encoding="ascii")
+    (secret / "secret.stl").write_text(TRIANGLE_STL, encoding="ascii")
     package = tmp_path / "a" / "ws" / "pkg"
     (package / "urdf" / "meshes").mkdir(parents=True)
     (package / "meshes").mkdir()
-    (package / "urdf" / "meshes" / "base.stl").write_text(STL, encoding="ascii")
-    (package / "meshes" / "arm.stl").write_text(STL, encoding="ascii")
+    (package / "urdf" / "meshes" / "base.stl").write_text(TRIANGLE_STL, encoding="ascii")
+    (package / "meshes" / "arm.stl").write_text(TRIANGLE_STL, encoding="ascii")
     os.symlink(secret / "secret.stl", package / "urdf" / "meshes" / "link.stl")  # inside, pointing out
     passwd = "package://" + "../" * 40 + "etc/passwd"
     absolute = str(secret / "secret.stl")
