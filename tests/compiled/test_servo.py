@@ -73,7 +73,8 @@ def assert_same(
     robot: pinrate.Robot, python: pinrate.Trajectory, compiled: pinrate.Trajectory, *, bitwise: bool
 ) -> None:
     """Bit for bit where both make the same operations; else q, rates and errors to 1e-12
-    (they differ by rounding, fed back through a contracting loop) and ρ within the bound of
+    (they differ by rounding, fed back through a contracting loop), rates also by q's
+    difference / dt on a step that lands a joint on its limit, and ρ within the bound of
     support.spectral_radius_tolerance (recorded, not fed back; an eigenvalue of a nearly
     defective G moves by a root of its rounding)."""
     assert compiled.reason == python.reason
@@ -90,6 +91,14 @@ def assert_same(
             tolerance = spectral_radius_tolerance(robot, python.partition, python.q[finite])
             excess = np.abs(ours[finite] - theirs[finite]) - tolerance
             assert not np.any(excess > 0), f"rho differs beyond its bound at steps {np.flatnonzero(finite)[excess > 0]}"
+        elif field == "joint_rates":
+            # A step that lands a joint on its limit sets that joint's rate to (limit - q) / dt,
+            # whatever word ranks first: q's rounding difference comes out divided by dt (the
+            # subtraction and division add only 2 eps |rate|, inside the 1e-12 relative part).
+            carried = np.max(np.abs(compiled.q[: len(ours)] - python.q[: len(ours)]), axis=1) / python.dt
+            excess = np.abs(ours - theirs) - (1e-12 + 1e-12 * np.abs(theirs) + carried[:, None])
+            beyond = np.flatnonzero(excess.max(axis=1) > 0)
+            assert not beyond.size, f"joint_rates differ beyond rounding at steps {beyond}"
         else:
             np.testing.assert_allclose(ours, theirs, rtol=1e-12, atol=1e-12, err_msg=field)
 
