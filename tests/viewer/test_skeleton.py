@@ -249,3 +249,32 @@ def test_unloadable_meshes_leave_the_whole_tree(tmp_path) -> None:
     assert robot.visual_model.ngeoms == 0
     viewer = Viewer(robot, offline=True)
     assert {body.joint for body in viewer.skeleton.bodies} == set(range(robot.model.njoints))
+
+
+ONE_JOINT_URDF = """<?xml version="1.0"?>
+<robot name="one">
+  <link name="base_link"/>
+  <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+  <link name="l1"/>
+  <joint name="tool_fixed" type="fixed"><parent link="l1"/><child link="tool0"/><origin xyz="0.3 0 0"/></joint>
+  <link name="tool0"/>
+</robot>
+"""
+
+
+def test_a_one_joint_robot_gets_its_skeleton(tmp_path) -> None:
+    # Pinocchio hands a one-column Jacobian back as a vector: the skeleton read its axis as
+    # a column of a matrix and raised IndexError for any one-joint robot.
+    path = tmp_path / "one.urdf"
+    path.write_text(ONE_JOINT_URDF)
+    robot = pinrate.load(path)
+    viewer = Viewer(robot, offline=True)
+    q = np.array([0.7])
+    points = world_points(
+        viewer.node_transforms(q)["pinrate/skeleton/j1"], skeleton_meshes(viewer)["pinrate/skeleton/j1/joint"][0]
+    )
+    centre = kinematics(robot, q).oMi[1].translation
+    # The cylinder lies along the world y axis (the joint's axis, unchanged by turning about it).
+    across = np.linalg.norm((points - centre)[:, [0, 2]], axis=1)
+    assert np.max(np.abs((points - centre)[:, 1])) > np.max(across)

@@ -225,6 +225,7 @@ class CollisionMonitor:
         if joint == 0:
             return np.zeros(3)
         jacobian = pin.getJointJacobian(self._model, self._data, joint, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        jacobian = jacobian.reshape(6, self._model.nv)  # one joint: eigenpy's vector
         twist = jacobian @ joint_rates
         return twist[:3] + np.cross(twist[3:], point - np.array(self._data.oMi[joint].translation))
 

@@ -45,6 +45,7 @@ class WristCentre:
         pin.updateFramePlacements(model, data)
         centre = wrist_centre(data, self.axes, np.array(data.oMf[robot.tip_id].translation))
         jacobian = pin.getJointJacobian(model, data, self.body, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        jacobian = jacobian.reshape(6, model.nv)  # one joint: eigenpy hands back a vector
         lever = centre - np.array(data.oMi[self.body].translation)
         linear = jacobian[:3] - np.cross(lever, jacobian[3:].T).T  # v_p = v_i + ω_i x (p - o_i)
         sensor = observation.world_T_sensor.rotation

@@ -180,7 +180,8 @@ def _axes(model: pin.Model) -> list[np.ndarray | None]:
         if nv != 1:
             axes.append(None)
             continue
-        column = np.asarray(pin.getJointJacobian(model, data, joint, pin.LOCAL))[:, index]
+        # eigenpy hands a one-column matrix back as a vector: keep (6, nv).
+        column = np.asarray(pin.getJointJacobian(model, data, joint, pin.LOCAL)).reshape(6, model.nv)[:, index]
         angular, linear = column[3:], column[:3]
         vector = angular if np.linalg.norm(angular) > 1e-12 else linear
         norm = float(np.linalg.norm(vector))
