@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import pinrate
-from pinrate.kinematics.home import WELL_CONDITIONED
+from pinrate.kinematics.home import WELL_CONDITIONED, find_home
 from pinrate.robots import example_robot_data_share
 from support import fuzz_count, partition_rows_and_columns, random_urdf
 
@@ -91,6 +91,19 @@ def test_an_srdf_beside_the_urdf_gives_the_home(tmp_path: Path, states: dict, ch
     assert robot.home_choice.startswith(chosen)
     if elbow is not None:
         np.testing.assert_allclose(robot.home(), [0.3, elbow])
+    for name, state_elbow in states.items():
+        # a stretched state (elbow 0: the planar determinant 0.5 * 0.4 * sin(elbow) is 0) is
+        # passed over by name, and says why
+        passed = f"SRDF group_state '{name}' passed over (singular" in robot.home_choice
+        assert passed == (state_elbow == 0.0), robot.home_choice
+
+
+def test_a_named_pose_outside_the_limits_is_passed_over_by_name(tmp_path: Path) -> None:
+    # (An SRDF's states are put inside the limits when read; find_home checks whatever it is given.)
+    (tmp_path / "planar.urdf").write_text(PLANAR, encoding="utf-8")
+    robot = pinrate.load(tmp_path / "planar.urdf")
+    _, why = find_home(robot, pinrate.Partition.auto(robot), [("pose 'far'", np.array([0.3, 3.5]))])
+    assert why.endswith("; pose 'far' passed over (outside the limits of elbow)"), why
 
 
 @pytest.mark.parametrize("seed", range(fuzz_count(40)))

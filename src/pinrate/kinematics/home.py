@@ -144,9 +144,24 @@ def find_home(
     (SEARCH_FRACTIONS) where one is comfortable, else the best well-conditioned draw of all,
     else that neutral."""
     ranks = generic_ranks(robot, partition)
+    passed_over: list[str] = []  # what a user who wrote an SRDF home needs to read when it is not taken
     for label, q in named:
-        if not _outside_limits(robot, q) and _home_quality(robot, partition, q, ranks).well_conditioned:
-            return q.copy(), label
+        outside = _outside_limits(robot, q)
+        quality = _home_quality(robot, partition, q, ranks)
+        if not outside and quality.well_conditioned:
+            return q.copy(), "; ".join([label, *passed_over])
+        why = (
+            f"outside the limits of {', '.join(outside)}"
+            if outside
+            else (f"singular: smallest singular value {quality.smallest_singular_value:.3g} < {WELL_CONDITIONED:g}")
+        )
+        passed_over.append(f"{label} passed over ({why})")
+    home, why = _search(robot, partition, ranks)
+    return home, "; ".join([why, *passed_over])
+
+
+def _search(robot: Robot, partition: Partition, ranks: Ranks) -> tuple[np.ndarray, str]:
+    """find_home without named poses: neutral if comfortable, else the seeded search."""
     neutral = robot.neutral()
     moved = _outside_limits(robot, neutral)
     for joint in moved:  # onto its nearest limit: a home is inside every joint's limits

@@ -13,7 +13,8 @@ from ..kinematics.urdf import read_urdf, robot_from_urdf
 from ..kinematics.urdf_meshes import ros_package_dirs
 from . import parametric
 from .catalog import EXAMPLE_ROBOTS, CatalogEntry, example_robot_data_share, example_robot_path
-from .xacro_files import checked_arguments, expand_xacro, is_xacro, srdf_beside
+from .srdf_files import find_srdf, robot_name
+from .xacro_files import checked_arguments, expand_xacro, is_xacro
 
 
 def known_names() -> list[str]:
@@ -37,7 +38,9 @@ def load(
             ``robot.xacro``), expanded first by xacrodoc (``pip install 'pinrate[xacro]'``);
             or a name from :func:`known_names` (the papers' robots such as ``"scara"``, and
             ``"ur5"``, ``"panda"``, ...). A URDF's home comes from the SRDF beside it with the
-            same stem (``robot.srdf`` for ``robot.urdf``, ``robot.urdf.xacro`` and ``robot.xacro``).
+            same stem (``robot.srdf`` for ``robot.urdf``, ``robot.urdf.xacro`` and ``robot.xacro``),
+            else from a MoveIt config package next to its package whose SRDF names the same
+            robot (:mod:`pinrate.robots.srdf_files`).
         tip: the frame whose origin is the TCP (a link, joint or fixed frame; a name that is
             both a link and a joint means the link). Default: the name table's tip; for any
             other URDF, the tool frame of the main arm, gripper and hand joints left out
@@ -93,7 +96,7 @@ def load(
             urdf_path=path if encoding in ("utf-8", "ascii") else None,
             package_dirs=search_dirs,
             max_joints=max_joints,
-            srdf_path=srdf_beside(path),
+            srdf_path=find_srdf(path, robot_name(text)),
             search_home=True,
             confine=True,
         )

@@ -29,14 +29,6 @@ def is_xacro(path: Path) -> bool:
     return path.name.endswith(".xacro")
 
 
-def srdf_beside(path: Path) -> Path:
-    """The SRDF whose stem is the description's: ``robot.srdf`` beside ``robot.urdf``,
-    ``robot.urdf.xacro`` or ``robot.xacro``."""
-    if is_xacro(path):
-        return path.with_name(path.name.removesuffix(".xacro").removesuffix(".urdf") + ".srdf")
-    return path.with_suffix(".srdf")
-
-
 def checked_arguments(arguments: object) -> dict[str, str]:
     """``xacro_args`` as a dict of names to strings; InputError otherwise."""
     if not isinstance(arguments, Mapping):
