@@ -14,6 +14,7 @@ mimics, with one mesh not shipped; scara, a SCARA with a quill.
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import warnings
@@ -126,6 +127,21 @@ def test_the_srdf_home_beside_the_xacro_is_its_named_group_state() -> None:
     # "home", not the first group_state ("all_zeros", a wrist singularity)
     assert robot.home_choice == "SRDF group_state 'home'"
     np.testing.assert_array_equal(robot.home(), [0.0, 0.2, -0.3, 0.0, 0.9, 0.0])  # the SRDF's values
+
+
+def test_the_srdf_of_a_moveit_config_package_beside_the_description_gives_the_home() -> None:
+    robot = loaded("sda")
+    assert robot.srdf_path == CORPUS / "sda_moveit_config" / "config" / "sda.srdf"
+    # its "home" has both arms stretched (singular): passed over, said so, "ready" taken
+    match = re.fullmatch(
+        r"SRDF group_state 'ready'; SRDF group_state 'home' passed over "
+        r"\(singular: smallest singular value (\S+) < 0.001\)",
+        robot.home_choice,
+    )
+    assert match and float(match.group(1)) < 1e-12, robot.home_choice  # exactly singular, up to rounding
+    ready = {"torso_joint_b1": 0.25, **dict(zip(SDA_LEFT[1:], [0.3, -0.6, 0.2, 1.2, -0.4, 0.9, 0.1], strict=True))}
+    for joint, value in ready.items():
+        assert robot.home()[robot.joint_names.index(joint)] == value, joint
 
 
 def test_the_variant_argument_picks_its_dimensions_from_the_yaml() -> None:
