@@ -112,7 +112,7 @@ def plan_step(context: StepContext, rule: Rule, wrist: str, observation: Observa
     details: tuple[str, ...] = ()
     dropped: frozenset[int] = frozenset()
     merged = released_by = None
-    change = wrist_rule(wrist, context.names, weakest, n_arm)
+    change = wrist_rule(wrist, context, weakest, n_arm, observation.q)
     if change is not None:
         dropped, merged, released_by = change.dropped, change.merged, change.released_by
         statuses, details = (Status.WRIST_SINGULARITY,), (change.detail,)

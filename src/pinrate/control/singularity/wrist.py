@@ -18,6 +18,9 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import numpy as np
+
+from ..context import StepContext
 from ..singular_region import Conditioning, c_said, wrist_pair
 
 
@@ -30,14 +33,20 @@ class WristRule(NamedTuple):
     detail: str
 
 
-def wrist_rule(wrist: str, names: tuple[str, ...], weakest: Conditioning, n_arm: int) -> WristRule | None:
+def wrist_rule(
+    wrist: str, context: StepContext, weakest: Conditioning, n_arm: int, q: np.ndarray
+) -> WristRule | None:
     """The ``wrist`` strategy's rule when the weakest motion is a wrist pair's, else None.
-    ``names``: the partition's joints in partition order."""
+    Its detail names the pair and the value at q of each joint between them (the one whose
+    angle brings the two axes into line: Barker's θ5, the UR5's wrist_2)."""
     pair = wrist_pair(weakest, n_arm)
     if pair is None:
         return None
+    names = context.names
     first, last, _ = pair
     joints = f"{names[first]} and {names[last]}"
+    between = (context.joint_said(position, q) for position in range(first + 1, last))
+    said = [*filter(None, between), c_said(weakest.value, f"c({weakest.block})")]
     dropped: frozenset[int] = frozenset()
     merged = released_by = None
     if wrist == "split":
@@ -51,7 +60,7 @@ def wrist_rule(wrist: str, names: tuple[str, ...], weakest: Conditioning, n_arm:
         dropped,
         merged,
         released_by,
-        f"wrist axes of {joints} aligned ({c_said(weakest.value, f'c({weakest.block})')}): {how}",
+        f"wrist axes of {joints} aligned ({', '.join(said)}): {how}",
     )
 
 
