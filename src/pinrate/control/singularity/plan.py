@@ -77,7 +77,9 @@ def solve_planned(
     system = reduced @ columns.matrix
 
     def solved(command: np.ndarray) -> np.ndarray:
-        partial = filtered_rates(system, index.m, columns.n_arm, command, context.algorithm, plan.invert, context.row_scale)
+        partial = filtered_rates(
+            system, index.m, columns.n_arm, command, context.algorithm, plan.invert, context.row_scale
+        )
         return columns.matrix @ partial
 
     partition_rates = solved(twist)

@@ -53,9 +53,7 @@ class WristRule(NamedTuple):
     detail: str
 
 
-def wrist_rule(
-    wrist: str, context: StepContext, weakest: Conditioning, n_arm: int, q: np.ndarray
-) -> WristRule | None:
+def wrist_rule(wrist: str, context: StepContext, weakest: Conditioning, n_arm: int, q: np.ndarray) -> WristRule | None:
     """The ``wrist`` strategy's rule when the weakest motion is a wrist pair's, else None.
     Its detail names the pair and the value at q of each joint between them (the one whose
     angle brings the two axes into line: Barker's θ5, the UR5's wrist_2)."""
