@@ -308,3 +308,24 @@ def test_the_singular_region_every_strategy_and_starts_away_from_home(
         settings = {"algorithm": algorithm, "singularity": singularity, "wrist": wrist, "velocity_limits": None}
         python, compiled = both(robot, start, target, max_steps=800, **settings)
         assert_same(robot, python, compiled, bitwise=bitwise(robot, algorithm))
+
+
+@pytest.mark.parametrize("wrist", ["turn", "split"])
+def test_the_cause_of_a_stall_in_the_same_words(wrist: str) -> None:
+    """A run across Barker's wrist singularity (passed by "turn", a stall named by "split"),
+    and one that stalls with θ4 on its limit: both paths give the same reason, word for word
+    (the steps in the singular region are Python's on both: q agrees to rounding)."""
+    robot = pinrate.robots.barker_arm()
+    q0 = robot.home()
+    q0[4] = -0.007
+    q_target = q0.copy()
+    q_target[[3, 4, 5]] += [math.pi / 2, 0.307, -math.pi / 2]
+    python, compiled = both(robot, q0, robot.pose(q_target), wrist=wrist)
+    assert_same(robot, python, compiled, bitwise=False)
+    assert python.converged if wrist == "turn" else "; wrist singularity on " in python.reason
+    q0[4] = 0.3
+    q_target = q0.copy()
+    q_target[[1, 3, 4, 5]] += [0.1, 0.4, -0.6, -0.3]
+    python, compiled = both(robot, q0, robot.pose(q_target), wrist=wrist)
+    assert_same(robot, python, compiled, bitwise=False)
+    assert python.reason.endswith("; at a joint limit on 500 of its 500 steps: held at a position limit: theta4")

@@ -136,6 +136,20 @@ def test_barker_wrist_rules_eq_60_to_63_at_theta5_zero(wrist: str) -> None:
     assert Status.WRIST_SINGULARITY in step.conditions and "theta4 and theta6" in step.detail
     theta5, D = barker_wrist_rhs(robot, q, step.joint_rates[:3], twist)
     assert step.joint_rates[4] == pytest.approx(theta5, abs=1e-12)  # eq. 49
+    if wrist == "turn":
+        # Eq. 61 (θ4 + θ6 = D), and the pair's opposite turning toward the rotation the aligned
+        # axes cannot make, about u = z4 x z5 (sensor axes): at θ5 = 0, W = [z4 z5 z4] has
+        # σ = √2, 1, 0, so the gain is 1 / (slow_threshold √2) along n = (1, 0, -1) / √2, i.e.
+        # |θ4 - θ6| = |b| / slow_threshold, b = u · (RVEL less the arm's rotation): θ5 and
+        # θ4 + θ6 make nothing along u. The sign at σ = 0 is the SVD's (either wrist solution).
+        J = robot.jacobian(q)
+        lost = np.cross(J[3:, 3], J[3:, 4])
+        lost /= np.linalg.norm(lost)
+        b = float(lost @ (twist[3:] - J[3:, :3] @ step.joint_rates[:3]))
+        theta4, theta6 = step.joint_rates[[3, 5]]
+        assert theta4 + theta6 == pytest.approx(D, abs=1e-12)
+        assert abs(b) > 0.05 and abs(theta4 - theta6) == pytest.approx(abs(b) / controller.slow_threshold, rel=1e-9)
+        return
     expected = {
         "split": (D / 2, D / 2),  # eq. 60-61: M2* splits θ4 + θ6 = D equally
         "hold_first": (0.0, D),  # eq. 62

@@ -21,7 +21,7 @@ ALGORITHMS = ("exact", "schur", "mca1", "mca2", "mca3", "dls")
 STRATEGIES = ("decelerate", "generalized_inverse", "freeze", "auxiliary_elbow", "adaptive_dls")
 """A copy of :data:`pinrate.control.singularity.STRATEGIES`."""
 
-WRIST_STRATEGIES = ("split", "hold_first", "last_then_first")
+WRIST_STRATEGIES = ("turn", "split", "hold_first", "last_then_first")
 """A copy of :data:`pinrate.control.singularity.WRIST_STRATEGIES`."""
 
 FRAMES = ("hand", "base")
@@ -168,7 +168,7 @@ def _teleop(teleop: argparse.ArgumentParser) -> None:
     )
     teleop.add_argument("--algorithm", default="exact", choices=ALGORITHMS)
     teleop.add_argument("--singularity", default="decelerate", choices=STRATEGIES, help="near a singular block")
-    teleop.add_argument("--wrist", default="split", choices=WRIST_STRATEGIES, help="two wrist axes aligned")
+    teleop.add_argument("--wrist", default="turn", choices=WRIST_STRATEGIES, help="two wrist axes aligned")
     teleop.add_argument("--frame", default="hand", choices=FRAMES, help="axes of the commands (switchable on the page)")
     teleop.add_argument("--rate", type=positive, default=500.0, help="control loop rate in Hz (default 500)")
     teleop.add_argument(

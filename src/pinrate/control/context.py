@@ -12,12 +12,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SingularBlockError
+from ..kinematics.axes import joint_unit, joint_value
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex
 from ..solvers.conditioning import inverse_condition_bound
 from ..solvers.rates import partition_rates
 from .observation import Observation
-from .singular_region import Conditioning, conditioning
+from .singular_region import NOISE_FLOOR, Conditioning, conditioning
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,6 +98,18 @@ class StepContext:
             except SingularBlockError:
                 return 0.0
         return bound
+
+    def joint_said(self, position: int, q: np.ndarray) -> str:
+        """The value of the partition's joint at ``position`` at q in words ("theta5 = -0.007
+        rad"; rad or m), or "" for a joint of more freedoms. Under NOISE_FLOOR it is said as
+        such: the two paths' q differ by rounding there, and so would the digits and the sign."""
+        name = self.names[position]
+        joint_id = self.robot.joint_id(name)
+        value = joint_value(self.robot.model, joint_id, q)
+        if value is None:
+            return ""
+        unit = joint_unit(self.robot.model, joint_id)
+        return f"|{name}| < {NOISE_FLOOR:g} {unit}" if abs(value) < NOISE_FLOOR else f"{name} = {value:.3g} {unit}"
 
     def solve_without(self, observation: Observation, twist: np.ndarray, left_out: frozenset[str]) -> np.ndarray:
         """The algorithm's rates with the ``left_out`` joints removed from the partition (they

@@ -125,7 +125,7 @@ class Controller:
         partition: Partition | None = None,
         dt: float = 0.01,
         singularity: str = "decelerate",
-        wrist: str = "split",
+        wrist: str = "turn",
         velocity_limits: object = None,
         position_limits: bool = True,
         singular_threshold: float = SINGULAR_THRESHOLD,

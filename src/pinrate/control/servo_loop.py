@@ -119,7 +119,7 @@ def servo(
     stall_time: float | None = None,
     velocity_limits: object = math.inf,
     singularity: str = "decelerate",
-    wrist: str = "split",
+    wrist: str = "turn",
     controller: Controller | None = None,
     **controller_options: Any,
 ) -> Trajectory:

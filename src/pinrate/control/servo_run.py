@@ -16,6 +16,7 @@ from .commands import PoseGoal
 from .controller import Controller, Observation, error_norms
 from .limits.position import reached_detail
 from .limits.velocity import scaled_detail
+from .stall import stall_cause
 from .status import Status, most_severe
 from .trajectory import Trajectory
 
@@ -166,11 +167,14 @@ class ServoRun:
         self.final, self.reason = "diverging", f"diverging: {growth} at step {self.step_number}"
 
     def _stalled(self, total: float) -> None:
+        """The reason names the cause its window's steps met (:func:`~.stall.stall_cause`)."""
+        words, details = self._words()
+        window = slice(self.progress_step, self.step_number)
         self.final = "stalled"
         self.reason = (
             f"stalled: error {total:.4g} (m + rad) has not improved by {STALL_IMPROVEMENT:.0%} on "
             f"{self.progress:.4g} (step {self.progress_step}) for {self.stall_steps * self.controller.dt:g} s, "
-            f"at step {self.step_number}"
+            f"at step {self.step_number}; {stall_cause(words[window], details[window])}"
         )
 
     def _conclude(self, outcome: int, outcomes: Any) -> None:

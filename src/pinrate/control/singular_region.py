@@ -20,7 +20,7 @@ from ..errors import InputError, choices_hint
 from ..kinematics.partition import split_blocks
 from ..solvers.conditioning import inverse_condition
 
-WRIST_STRATEGIES = ("split", "hold_first", "last_then_first")
+WRIST_STRATEGIES = ("turn", "split", "hold_first", "last_then_first")
 """The values of ``Controller(wrist=...)``."""
 
 SLOW_THRESHOLD = 0.02

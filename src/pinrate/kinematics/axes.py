@@ -3,10 +3,13 @@
 A revolute joint's axis is fixed in its own frame (:func:`local_axis`); after
 ``pinocchio.forwardKinematics`` at q its world direction is ``oMi.rotation @ axis``. The wrist
 centre (Barker's wrist-centre decoupling) is where the first two wrist axes meet, or the
-middle of their common perpendicular when they do not.
+middle of their common perpendicular when they do not. A 1-DOF joint's value at q
+(:func:`joint_value`) is its angle or stroke.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pinocchio as pin
@@ -78,4 +81,31 @@ def distance_to_axis(point: np.ndarray, origin: np.ndarray, axis: np.ndarray) ->
     return float(np.linalg.norm(offset - (offset @ axis) * axis))
 
 
-__all__ = ["PARALLEL", "Axis", "distance_to_axis", "local_axis", "world_axis", "wrist_axes", "wrist_centre"]
+def joint_value(model: pin.Model, joint_id: int, q: np.ndarray) -> float | None:
+    """A 1-DOF joint's value at q: q itself for a joint of one coordinate (rad or m), the
+    angle atan2(sin, cos) for a continuous joint (rad, its q is (cos, sin)), None for a joint
+    of more freedoms."""
+    joint = model.joints[joint_id]
+    if joint.nq == 1:
+        return float(q[joint.idx_q])
+    if joint.nq == 2 and joint.nv == 1:
+        return math.atan2(float(q[joint.idx_q + 1]), float(q[joint.idx_q]))
+    return None
+
+
+def joint_unit(model: pin.Model, joint_id: int) -> str:
+    """The unit of a 1-DOF joint's value: "m" for a prismatic joint, "rad" otherwise."""
+    return "m" if model.joints[joint_id].shortname().startswith("JointModelP") else "rad"
+
+
+__all__ = [
+    "PARALLEL",
+    "Axis",
+    "distance_to_axis",
+    "joint_unit",
+    "joint_value",
+    "local_axis",
+    "world_axis",
+    "wrist_axes",
+    "wrist_centre",
+]

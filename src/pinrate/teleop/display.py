@@ -13,6 +13,7 @@ import numpy as np
 
 from ..control.controller import Step
 from ..control.status import Status
+from ..kinematics.axes import joint_value
 from ..kinematics.manipulator import Robot
 
 GREY, GREEN, BLUE, AMBER, ORANGE, PURPLE, RED, BLACK = (
@@ -120,19 +121,10 @@ def joint_gauges(robot: Robot, driven: Iterable[str] | None = None) -> list[Join
 
 
 def joint_values(robot: Robot, q: np.ndarray) -> list[float | None]:
-    """Each moving joint's value at q, in velocity order: q itself for 1-coordinate joints,
-    the angle atan2(sin, cos) for continuous joints, None for joints of more freedoms."""
-    values: list[float | None] = []
-    model = robot.model
-    for name in robot.joint_names:
-        joint = model.joints[robot.joint_id(name)]
-        if joint.nq == 1:
-            values.append(float(q[joint.idx_q]))
-        elif joint.nq == 2 and joint.nv == 1:
-            values.append(math.atan2(float(q[joint.idx_q + 1]), float(q[joint.idx_q])))
-        else:
-            values.append(None)
-    return values
+    """Each moving joint's value at q, in velocity order (:func:`~pinrate.kinematics.axes.joint_value`:
+    q itself for 1-coordinate joints, the angle atan2(sin, cos) for continuous joints, None
+    for joints of more freedoms)."""
+    return [joint_value(robot.model, robot.joint_id(name), q) for name in robot.joint_names]
 
 
 __all__ = ["COLOURS", "JointGauge", "Said", "describe", "joint_gauges", "joint_values"]

@@ -38,6 +38,8 @@ Wrist singularity (two wrist axes aligned: Barker θ5 = 0, UR5 wrist_2 = 0): W u
 least :data:`WRIST_PAIR_SHARE` of its square). ``wrist=`` then decides those two joints'
 rates, whatever ``singularity=`` is, by a change of variables of the wrist columns:
 
+* ``"turn"`` (default): as ``"split"``, and the pair turns against itself toward the
+  rotation the aligned axes cannot make, so a servo passes the singularity (:mod:`.wrist`);
 * ``"split"``: the pair moves as one joint, each at the same rate (the sign matching the
   axes' orientation): they share the rotation about the common axis equally, eq. 61 — at
   exact alignment this is the Moore-Penrose solution of eq. 60;

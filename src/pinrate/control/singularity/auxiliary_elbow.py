@@ -144,7 +144,7 @@ class AuxiliaryElbow:
             value, motion = inverse_condition(left, min(left.shape))
             if value < self.context.slow_threshold:
                 weakest = Conditioning(value, "rows left to the other joints", others @ motion)
-                rule = wrist_rule(self.wrist, self.context.names, weakest, n_arm)
+                rule = wrist_rule(self.wrist, self.context, weakest, n_arm, q)
                 if rule is not None:
                     dropped, merged, released_by, detail = rule
                     statuses.append(Status.WRIST_SINGULARITY)

@@ -14,7 +14,7 @@ from ..context import StepContext
 from ..observation import Observation
 from ..singular_region import ColumnMap, Conditioning, block_of, c_said
 from ..status import Status
-from .wrist import wrist_rule
+from .wrist import LostRotation, lost_rotation, wrist_rule
 
 
 class Plan(NamedTuple):
@@ -32,6 +32,7 @@ class Plan(NamedTuple):
     statuses: tuple[Status, ...]
     details: tuple[str, ...]
     frozen: tuple[str, ...]
+    lost: LostRotation | None = None  # the rotation the wrist rule leaves out, and the pair's turn that makes it
 
 
 class Rule(Protocol):
@@ -60,7 +61,9 @@ def solve_planned(
     context: StepContext, observation: Observation, twist: np.ndarray, plan: Plan, left_out: frozenset[str]
 ) -> np.ndarray:
     """Rates (nv,) by the plan's change of variables and inversion, ``left_out`` joints
-    (blocked at a limit) held too. Finite for every J."""
+    (blocked at a limit) held too; with the wrist rule's lost rotation (:mod:`.wrist`), the
+    pair's turn r n that makes it (unless one of its joints is held), the other joints solving
+    for the rest of the twist. Finite for every J."""
     index = context.index
     dropped = plan.dropped | {context.positions[name] for name in left_out}
     if plan.released_by is not None and plan.released_by[1] in dropped:
@@ -70,10 +73,22 @@ def solve_planned(
         if dropped == plan.dropped
         else ColumnMap.of(index.arm_columns.size, index.wrist_columns.size, dropped, plan.merged)
     )
-    reduced = context.reduced(observation.jacobian) @ columns.matrix
-    solved = filtered_rates(reduced, index.m, columns.n_arm, twist, context.algorithm, plan.invert, context.row_scale)
+    reduced = context.reduced(observation.jacobian)
+    system = reduced @ columns.matrix
+
+    def solved(command: np.ndarray) -> np.ndarray:
+        partial = filtered_rates(
+            system, index.m, columns.n_arm, command, context.algorithm, plan.invert, context.row_scale
+        )
+        return columns.matrix @ partial
+
+    partition_rates = solved(twist)
+    lost = plan.lost
+    if lost is not None and not any(lost.motion[position] for position in dropped - plan.dropped):
+        turn = lost.turn(twist - reduced @ partition_rates)
+        partition_rates = turn + solved(twist - reduced @ turn)
     rates = np.zeros(context.robot.nv)
-    rates[index.columns] = columns.matrix @ solved
+    rates[index.columns] = partition_rates
     return rates
 
 
@@ -112,8 +127,11 @@ def plan_step(context: StepContext, rule: Rule, wrist: str, observation: Observa
     details: tuple[str, ...] = ()
     dropped: frozenset[int] = frozenset()
     merged = released_by = None
-    change = wrist_rule(wrist, context.names, weakest, n_arm)
+    change = wrist_rule(wrist, context, weakest, n_arm, observation.q)
+    lost = None
     if change is not None:
+        # "turn" turns the pair toward the rotation it leaves out; Barker's rules do not (:mod:`.wrist`).
+        lost = lost_rotation(context, reduced, weakest, n_arm) if wrist == "turn" else None
         dropped, merged, released_by = change.dropped, change.merged, change.released_by
         statuses, details = (Status.WRIST_SINGULARITY,), (change.detail,)
         columns = ColumnMap.of(n_arm, n_wrist, dropped, merged)
@@ -131,6 +149,7 @@ def plan_step(context: StepContext, rule: Rule, wrist: str, observation: Observa
         statuses,
         details,
         (),
+        lost,
     )
     if weakest.value >= context.slow_threshold:
         return plan
