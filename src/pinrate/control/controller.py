@@ -76,7 +76,9 @@ class Controller:
         singularity: what a step in the singular region does, a name of
             :data:`~pinrate.control.singularity.STRATEGIES` (see that module).
         wrist: how two aligned wrist axes share a rotation, a name of
-            :data:`~pinrate.control.singularity.WRIST_STRATEGIES`.
+            :data:`~pinrate.control.singularity.WRIST_STRATEGIES`; "split" (the contract's
+            default, Barker eq. 61) leaves out the rotation the aligned axes cannot make,
+            "turn" (servo's and the command line's default) turns the pair toward it.
         velocity_limits: None for the URDF's ``<limit velocity>`` of each joint (none where it
             gives 0 or none), a number for every joint, or one per velocity component (nv,),
             in rad/s or m/s; inf for none. When one binds, all rates are scaled alike.
@@ -125,7 +127,7 @@ class Controller:
         partition: Partition | None = None,
         dt: float = 0.01,
         singularity: str = "decelerate",
-        wrist: str = "turn",
+        wrist: str = "split",
         velocity_limits: object = None,
         position_limits: bool = True,
         singular_threshold: float = SINGULAR_THRESHOLD,

@@ -5,11 +5,12 @@ Two wrist axes are aligned when the weakest block's smallest right singular vect
 by two wrist joints (:func:`~pinrate.control.singular_region.wrist_pair`); the rule is a change
 of the wrist's rate variables:
 
-* ``"turn"`` (the default): as ``"split"``, and the pair turns against itself toward the
-  rotation the aligned axes cannot make (below), so a servo passes the singularity;
-* ``"split"``: the pair moves as one joint, each at the same rate: they share the rotation
-  about the common axis equally (eq. 61; at exact alignment the Moore-Penrose solution of
-  eq. 60);
+* ``"turn"`` (the default of ``servo`` and the command line): as ``"split"``, and the pair
+  turns against itself toward the rotation the aligned axes cannot make (below), so a servo
+  passes the singularity;
+* ``"split"`` (the Controller's default, contract v2): the pair moves as one joint, each at
+  the same rate: they share the rotation about the common axis equally (eq. 61; at exact
+  alignment the Moore-Penrose solution of eq. 60);
 * ``"hold_first"``: the first of the pair (nearer the base) holds still, the last takes the
   whole rotation (eq. 62);
 * ``"last_then_first"``: as ``hold_first`` until the last is held at a position limit, then
