@@ -146,11 +146,11 @@ def test_ur5_retracts_the_hand_toward_the_shoulder_at_full_extension() -> None:
     assert retract(Controller(robot), start) @ inward < 0.1 * (moved @ inward)
 
 
-def test_arms_without_an_elbow_singularity_decelerate_as_the_default() -> None:
+def test_arms_without_an_elbow_singularity_solve_by_the_generalized_inverse() -> None:
     robot = pinrate.load("xarm7")
     controller = Controller(robot, singularity="auxiliary_elbow")
     assert controller.elbow is None
-    reference = Controller(robot)
+    reference = Controller(robot, singularity="generalized_inverse")  # Barker's eq. 38, which eq. 45-46 supplement
     rng = np.random.default_rng(2)
     for q in robot.sample_configurations(5, 3):
         twist = rng.normal(size=6) * 0.1
@@ -195,3 +195,79 @@ def test_a_jog_to_full_extension_also_turns_the_next_bend_and_reset_restores_it(
     controller.reset()
     home_side = math.copysign(1.0, robot.home()[2] - straight)
     assert math.copysign(1.0, controller.step(q, retract).joint_rates[2]) == home_side
+
+
+def barker_wrist_centre(q: np.ndarray, parameters: dict[str, float]) -> np.ndarray:
+    """The wrist centre in base axes (m), A3 = R3 = 0, α3 = 90°: (C1 F1 - S1 F2, S1 F1 + C1 F2,
+    NO + F3) with F1 .. F5 of eq. 27-31 — the position whose derivative is eq. 26's M (d/dθ2
+    of F1 is F3, of F3 is -F1; d/dθ3 of F5 is F4, of F4 is -F5)."""
+    no, es, sn, we = (parameters[name] for name in ("no", "es", "sn", "we"))
+    f1 = math.sin(q[1]) * es + math.sin(q[1] + q[2]) * we
+    f3 = math.cos(q[1]) * es + math.cos(q[1] + q[2]) * we
+    c1, s1 = math.cos(q[0]), math.sin(q[0])
+    return np.array([c1 * f1 - s1 * sn, s1 * f1 + c1 * sn, no + f3])
+
+
+def barker_m(q: np.ndarray, parameters: dict[str, float]) -> np.ndarray:
+    """Eq. 26 with A3 = R3 = 0, α3 = 90° (F2 = SN, F4 = C23 WE, F5 = S23 WE): TVEL^ = M θ̇_1..3."""
+    es, sn, we = (parameters[name] for name in ("es", "sn", "we"))
+    c1, s1 = math.cos(q[0]), math.sin(q[0])
+    f4, f5 = math.cos(q[1] + q[2]) * we, math.sin(q[1] + q[2]) * we
+    f1, f3 = math.sin(q[1]) * es + f5, math.cos(q[1]) * es + f4
+    return np.array([[-s1 * f1 - c1 * sn, c1 * f3, c1 * f4], [c1 * f1 - s1 * sn, s1 * f3, s1 * f4], [0.0, -f1, -f5]])
+
+
+def test_barker_fig3_down_command_is_executed_and_each_step_says_how() -> None:
+    """Barker's Fig. 3 pose (every θ 0: the arm straight up, at full extension θ3 = 0 and at
+    the minimum radius of eq. 32) and 1 s of 0.05 m/s "down" in the hand's axes: a command
+    toward the shoulder, feasible by bending the elbow. The elbow control acts only while
+    eq. 38 cuts the elbow's direction; then eq. 38 carries the hand down the line to the
+    shoulder, which is the minimum-radius line, where "decelerate" halts (issue 24: it halted
+    after 20.4 mm)."""
+    robot = pinrate.robots.barker_arm()
+    parameters = pinrate.robots.parameters("barker_arm")
+    controller = Controller(robot, singularity="auxiliary_elbow", velocity_limits=np.inf)
+    q = np.zeros(6)
+    np.testing.assert_allclose(robot.frame_pose(q, "hand")[:3, :3], np.eye(3), atol=1e-12)  # hand axes = base axes
+    np.testing.assert_allclose(barker_wrist_centre(q, parameters), robot.frame_pose(q, robot.tip)[:3, 3], atol=1e-12)
+    speed, dt, steps = 0.05, controller.dt, 100
+    down = np.array([0.0, 0.0, -speed])
+    twist = np.concatenate([down, np.zeros(3)])
+    # At Fig. 3 eq. 38 cannot make it: M*'s rates (rcond = the controller's cut) move the hand
+    # nowhere down, since the elbow's direction is M's null direction there.
+    assert (barker_m(q, parameters) @ np.linalg.pinv(barker_m(q, parameters), rcond=0.005) @ down)[2] == 0.0
+    start = barker_wrist_centre(q, parameters)
+    elbow_steps = []
+    for k in range(steps):
+        step = controller.step(q, twist)
+        made = robot.jacobian(q)[:6] @ step.joint_rates  # the twist these rates make at q, hand axes
+        missed = float(np.linalg.norm(made - twist)) / speed
+        # Honest: a step that does not make the command says the elbow control took it;
+        # one that makes it (to the rounding of REACH_TOLERANCE, 1e-6) is eq. 38's, said
+        # near the minimum-radius singularity (c of J about 1e-6 all the way).
+        if missed > 1e-6:
+            assert step.status is Status.AUXILIARY_ELBOW, (k, step.detail)
+            elbow_steps.append(k)
+        else:
+            assert step.status is Status.NEAR_SINGULARITY, (k, step.status, step.detail)
+        q = step.q
+        if k == 1:
+            handover = q.copy()
+    # The elbow control acts from full extension until eq. 38 no longer cuts the elbow's
+    # direction: its first two steps (θ3 = 0, then 1.7e-2 rad).
+    assert elbow_steps == [0, 1]
+    moved = barker_wrist_centre(q, parameters) - start
+    # Straight down: the elbow control keeps the hand on the line to the shoulder, eq. 38 on its command.
+    assert np.linalg.norm(moved[:2]) < 1e-6
+    # Each elbow-control step moves the hand down by 0 to v dt (it retracts at v sin β / sin β_r
+    # <= v): the travel is v T to within those two steps' v dt, 1 mm.
+    assert abs(-moved[2] - speed * dt * steps) <= 2 * speed * dt
+    # After the hand-over, the steps are eq. 38: M* (numpy's pinv, the cut 0.005) integrated by
+    # eq. 21 from the same pose reaches the same height. Both make the command to first order
+    # in every step; their joint paths differ by M's null motion (θ1 with θ2 at the minimum
+    # radius), which moves the wrist centre only sideways: 1e-6 m bounds the rest.
+    theta = handover[:3].copy()
+    for _ in range(steps - 2):
+        theta = theta + dt * np.linalg.pinv(barker_m(theta, parameters), rcond=0.005) @ down
+    eq38 = barker_wrist_centre(np.concatenate([theta, np.zeros(3)]), parameters)
+    assert eq38[2] == pytest.approx(start[2] + moved[2], abs=1e-6)

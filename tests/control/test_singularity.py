@@ -263,3 +263,38 @@ def test_a_conditioning_under_the_noise_floor_is_said_as_such() -> None:
     assert c_said(0.003, "c(W)") == "c(W) = 0.003"
     assert c_said(9.8e-15) == c_said(9.9e-15) == c_said(0.0) == "c < 1e-09"
     assert c_said(NOISE_FLOOR) == "c = 1e-09"
+
+
+def test_freeze_near_barkers_minimum_radius_holds_theta1_not_theta2_theta3() -> None:
+    """Barker's example freezes θ2 and θ3, the variables det M is written in; pinrate holds the
+    joints that carry the lost motion (freeze.py says why). Near the minimum radius (eq. 32),
+    holding θ2 and θ3 would lose a feasible "down" command entirely; holding θ1 makes it."""
+    robot = pinrate.robots.barker_arm()
+    parameters = pinrate.robots.parameters("barker_arm")
+    es, sn, we = parameters["es"], parameters["sn"], parameters["we"]
+    q = np.array([0.3, -0.25, 0.5, 0.0, 0.6, 0.0])
+    f1 = math.sin(q[1]) * es + math.sin(q[1] + q[2]) * we  # eq. 27: 0 at the minimum radius
+    f3 = math.cos(q[1]) * es + math.cos(q[1] + q[2]) * we  # eq. 29 (A3 = 0, α3 = 90°)
+    assert abs(f1) < 1e-3
+    m = barker_m(q)
+    # M's weakest motion is θ1 with θ2 at F2/F3 of it (F2 = SN; exact at F1 = 0, off by
+    # O(F1 / F3) <= 2e-3 at this F1): θ1 carries it.
+    weakest = np.linalg.svd(m)[2][-1]
+    expected = np.array([f3, sn, 0.0]) / math.hypot(f3, sn)
+    np.testing.assert_allclose(weakest * math.copysign(1.0, weakest[0]), expected, atol=2e-3)
+    down = np.array([0.0, 0.0, -0.05])  # base axes, m/s: in M's range (the lost direction is radial, horizontal)
+    # Barker's choice: θ1 alone moves the wrist centre, and M's θ1 column has no vertical part.
+    theta1_only = m[:, :1]
+    missed = down - theta1_only @ np.linalg.lstsq(theta1_only, down, rcond=None)[0]
+    assert np.linalg.norm(missed) == pytest.approx(0.05, rel=1e-12)
+    # pinrate's freeze: θ1 held (with a wrist joint cancelling its turn of the hand), θ2 and
+    # θ3 free, and the command made to the rounding of the reduced system (κ <= 1e4: 1e-6).
+    controller = Controller(robot, singularity="freeze", **UNLIMITED)
+    hand = robot.frame_pose(q, "hand")[:3, :3]
+    twist = np.concatenate([hand.T @ down, np.zeros(3)])
+    step = controller.step(q, twist)
+    assert step.status is Status.FROZEN, step.detail
+    assert "theta1" in step.frozen and not {"theta2", "theta3"} & set(step.frozen)
+    assert set(step.frozen) - {"theta1"} <= {"theta4", "theta5", "theta6"}
+    made = robot.jacobian(q) @ step.joint_rates
+    assert np.linalg.norm(made - twist) < 1e-6 * 0.05

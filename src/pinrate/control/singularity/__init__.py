@@ -27,8 +27,10 @@ least c is under ``slow_threshold``; there, ``singularity=`` decides:
 * ``"auxiliary_elbow"`` (Barker eq. 45-46, :mod:`pinrate.control.elbow`): while the elbow
   is within ``elbow_region`` of full extension, the elbow follows the command's component
   along the upper arm (the impossible outward one ignored), the shoulder retracts the hand
-  on the line to the shoulder and pitches the arm, the other joints serve the rest; elsewhere
-  as ``"decelerate"``;
+  on the line to the shoulder and pitches the arm, the other joints serve the rest, where
+  the generalized inverse cannot make the command (it cuts a commanded direction or turns
+  the elbow toward full extension); elsewhere as ``"generalized_inverse"`` (Barker's eq. 38,
+  which eq. 45-46 supplement);
 * ``"adaptive_dls"``: damped least squares with the damping raised as c falls,
   λ = :data:`MAX_DAMPING` · sqrt(1 - (c / slow_threshold)²), relative to each block's σ_1
   (Nakamura & Hanafusa 1986; Chiaverini 1997): the robust baseline.

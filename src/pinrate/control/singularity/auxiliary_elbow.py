@@ -3,7 +3,14 @@ the elbow is within ``elbow_region`` of full extension, the elbow follows the co
 component along the upper arm (the impossible outward one ignored), the shoulder retracts
 the hand on the line to the shoulder and pitches the arm, the other joints serve the rest;
 the elbow bends the other way each time the arm reaches full extension (K3 changes sign).
-Elsewhere the strategy is ``"decelerate"``'s (:func:`near`).
+The elbow control acts only where Barker's generalized inverse (eq. 38) cannot make the
+command (:meth:`AuxiliaryElbow.inverse_serves`: it cuts a commanded direction, or it would
+turn the elbow toward full extension); elsewhere, in the region and out of it, the strategy
+is ``"generalized_inverse"``'s (:func:`near`), as in Barker, whose auxiliary control
+supplements the generalized inverse near θ3 = 0 ("Equation (39) specifies azimuth
+movement"). It never halts a command the inverse makes: on Barker's arm, retracting from
+full extension keeps the wrist centre on the minimum-radius line (eq. 32: S2 ES + F5 = 0 at
+θ1 fixed), where ``"decelerate"`` halts though the command is in M's range.
 
 :class:`AuxiliaryElbow` owns the strategy's state: the elbow found, its region, the side of
 the next bend.
@@ -17,17 +24,20 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
+from ...errors import SingularBlockError
 from ...solvers.conditioning import inverse_condition
 from ..context import StepContext
 from ..elbow import ELBOW_REGION, EXTENDED, Elbow, arm_frame, elbow_rate, find_elbow, remaining_rates
 from ..observation import Observation
+from ..reach import REACH_TOLERANCE
 from ..singular_region import ColumnMap, Conditioning, c_said, carrying_joints
 from ..status import Status
-from . import decelerate
+from . import generalized_inverse
+from .plan import plan_step, solve_planned
 from .wrist import wrist_rule
 
-decelerates = True
-near = decelerate.near
+decelerates = False
+near = generalized_inverse.near
 
 
 class Auxiliary(NamedTuple):
@@ -107,7 +117,8 @@ class AuxiliaryElbow:
 
     def plan(self, observation: Observation, twist: np.ndarray) -> Auxiliary | None:
         """Barker's auxiliary elbow control at this q, or None: the elbow is outside its region,
-        or the upper arm's direction is not among the commanded linear components."""
+        the upper arm's direction is not among the commanded linear components, or the
+        generalized inverse makes the command here (:meth:`inverse_serves`)."""
         elbow = self.elbow
         q = observation.q
         bend = float(q[elbow.q_index]) - elbow.straight
@@ -122,7 +133,9 @@ class AuxiliaryElbow:
         sensor_rotation = observation.world_T_sensor.rotation
         axes = index.rows[:m]  # the sensor's linear axes the twist commands
         commanded = sensor_rotation[:, axes]  # their world directions (3, m)
-        if np.linalg.norm(commanded.T @ frame.outward) < CONTROLLED_SHARE:
+        if np.linalg.norm(commanded.T @ frame.outward) < CONTROLLED_SHARE or self.inverse_serves(
+            observation, twist, bend
+        ):
             return None
         world_linear = commanded @ twist[:m]  # TVEL in the world (m/s)
         directions = [
@@ -163,6 +176,28 @@ class AuxiliaryElbow:
             tuple(statuses),
             tuple(details),
         )
+
+    def inverse_serves(self, observation: Observation, twist: np.ndarray, bend: float) -> bool:
+        """Whether Barker's generalized inverse (eq. 38, the strategy's solve outside the elbow's
+        action) makes the command at q, so that the elbow control need not act (Barker: it is
+        for what the inverse cannot do near the singular position): its rates x leave a
+        residual ``‖twist - J_r x‖`` of at most :data:`~pinrate.control.reach.REACH_TOLERANCE`
+        ``‖twist‖`` (m/s and rad/s in one norm; no commanded direction cut), and they do not
+        turn the elbow toward full extension (``bend`` rad from it), where the inverse's elbow
+        rate grows as 1 / sin(bend) and a step would cross the singularity."""
+        context = self.context
+        plan = plan_step(context, generalized_inverse, self.wrist, observation, twist)
+        try:
+            if plan is None:
+                rates = context.solve_without(observation, twist, frozenset())
+            else:
+                rates = solve_planned(context, observation, twist, plan, frozenset())
+        except SingularBlockError:
+            return False
+        solved = rates[context.index.columns]
+        residual = float(np.linalg.norm(twist - context.reduced(observation.jacobian) @ solved))
+        toward_extension = solved[self.elbow.position] * bend < 0.0
+        return residual <= REACH_TOLERANCE * float(np.linalg.norm(twist)) and not toward_extension
 
     def solve(
         self, observation: Observation, twist: np.ndarray, auxiliary: Auxiliary, left_out: frozenset[str]

@@ -3,7 +3,21 @@ lost direction (those with at least :data:`~pinrate.control.singular_region.FREE
 the largest entry of the weakest block's smallest right singular vector) hold still and the
 others serve the command, until a step of all the joints would raise c: that step is then
 executed, nothing frozen (``Status.NEAR_SINGULARITY``), so the arm can always leave the
-region."""
+region.
+
+Which joints: Barker's example holds θ2 and θ3 as they "approach the singular condition in
+equations (32) and (33)", the variables det M is written in (it does not depend on θ1).
+pinrate holds the joints that carry the lost motion instead, for two reasons. Barker's
+choice does not generalise: c of a 6R arm depends on every joint but the first and last, and
+holding those leaves almost nothing. And it gives up feasible commands: near the
+minimum-radius singularity alone (eq. 32, S2 ES + F5 = 0) the lost motion is M's null
+vector, θ1 with θ2 at F2/F3 of it (about 0.17, under
+:data:`~pinrate.control.singular_region.FREEZE_SHARE`), and the lost
+direction is only the radial one; holding θ2 and θ3 leaves the wrist centre θ1's circle, and
+a "down" command (in M's range) is lost entirely, while holding θ1 (with the wrist joint
+that cancels its turn of the hand) leaves a well-conditioned system that makes every
+commanded component but the radial one. Tested in
+tests/control/test_singularity.py::test_freeze_near_barkers_minimum_radius_holds_theta1_not_theta2_theta3."""
 
 from __future__ import annotations
 
