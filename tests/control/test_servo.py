@@ -336,3 +336,11 @@ def test_a_controller_subclass_with_its_own_step_is_servoed_by_that_step(ur5: pi
     assert "steps its own way" in still.compiled_reason() and still.compiled() is None
     run = pinrate.servo(ur5, q0, target, controller=still)
     assert not run.converged and np.array_equal(run.q[-1], q0)
+
+
+@pytest.mark.parametrize("gain", [1e-300, 5e-324])
+def test_a_tiny_gain_is_not_an_error_of_the_stall_time_nobody_gave(ur5: pinrate.Robot, gain: float) -> None:
+    # The default window, 5 / gain seconds, is past stall_time's bound (or inf): it was refused
+    # as "stall_time must be ..." (or raised OverflowError); STALL_MAX_STEPS caps it.
+    trajectory = pinrate.servo(ur5, ur5.home(), ur5.pose(ur5.random_configuration(0)), gain=gain, max_steps=50)
+    assert not trajectory.converged and trajectory.reason.startswith("max_steps")

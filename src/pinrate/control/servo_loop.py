@@ -176,9 +176,11 @@ def servo(
             f"max_steps must be at most {MAX_STEPS:,} (a run records every step: servo again from "
             f"trajectory.q[-1] for a longer one), got {max_steps:,}"
         )
-    if stall_time is None:
-        stall_time = max(1.0, STALL_TIME_CONSTANTS / goal.gain)
-    stall_steps = min(math.ceil(check_positive(stall_time, "stall_time") / controller.dt), STALL_MAX_STEPS)
+    if stall_time is None:  # STALL_MAX_STEPS caps the window anyway: a tiny gain is no error of stall_time's
+        stall_time = max(1.0, STALL_TIME_CONSTANTS / goal.gain)  # inf for a subnormal gain
+    else:
+        check_positive(stall_time, "stall_time")
+    stall_steps = math.ceil(min(stall_time / controller.dt, STALL_MAX_STEPS))
     run = ServoRun(controller, goal, q, tol, stall_steps, max_steps)
     core = controller.compiled()
     if core is None:
