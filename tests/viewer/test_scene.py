@@ -154,6 +154,15 @@ def test_play_records_frames_and_writes_html(scara_viewer, tmp_path) -> None:
         scara_viewer.add_path(np.zeros((3, 2)), [0.1, 0.2, 0.3])
 
 
+def test_a_viewer_that_does_not_record_keeps_no_frame(tmp_path) -> None:
+    robot = pinrate.load("scara")
+    viewer = Viewer(robot, offline=True, record=False)
+    for seed in range(5):
+        viewer.show(robot.random_configuration(seed))
+    assert viewer.recorded_frames == 0
+    assert viewer.save_html(tmp_path / "scene.html").stat().st_size > 0  # the scene alone
+
+
 def test_demo_records_html(tmp_path) -> None:
     out = tmp_path / "demo.html"
     result = subprocess.run(

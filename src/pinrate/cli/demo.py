@@ -179,7 +179,8 @@ def demo(args: argparse.Namespace) -> int:
 
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", UserWarning)
-            viewer = Viewer(robot, host=args.host, open_browser=args.open)
+            # frames are kept only for --record: a long demo's memory stays flat without it
+            viewer = Viewer(robot, host=args.host, open_browser=args.open, record=record is not None)
         for warning in caught:
             warn(str(warning.message))
         print(f"Meshcat viewer: {viewer.url}", flush=True)

@@ -73,6 +73,8 @@ class Viewer:
         offline: no server: the scene is kept in this process (:attr:`scene`, a
             :class:`~.offline.SceneCommands`) for a page that builds it itself (the teleop
             console) or for :meth:`save_html`; :attr:`url` is "".
+        record: keep every frame :meth:`show` draws, for :meth:`save_html`'s replay (False:
+            a long session's memory stays flat, and the replay is the scene alone).
 
     Attributes:
         url: the page to open ("" when offline).
@@ -88,8 +90,10 @@ class Viewer:
         zmq_url: str | None = None,
         open_browser: bool = False,
         offline: bool = False,
+        record: bool = True,
     ) -> None:
         self.robot = check_robot(robot)
+        self.recording = bool(record)
         self.data = robot.model.createData()  # the viewer's own: a control loop keeps robot.data
         if zmq_url is not None:
             if offline:
@@ -201,11 +205,12 @@ class Viewer:
         return np.array(pin.updateFramePlacement(self.robot.model, self.data, self.robot.tip_id).translation)
 
     def show(self, q: np.ndarray, *, record: bool = True) -> None:
-        """Draw the robot at q (and remember the frame for :meth:`save_html`)."""
+        """Draw the robot at q (and remember the frame for :meth:`save_html` when the viewer
+        records and ``record`` is True)."""
         transforms = self.node_transforms(q)
         for name, transform in transforms.items():
             self.meshcat[name].set_transform(transform)
-        if record:
+        if record and self.recording:
             self._frames.append(transforms)
 
     def set_frame(self, name: str, pose: object, *, length: float = 0.1) -> None:
