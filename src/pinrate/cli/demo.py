@@ -120,6 +120,27 @@ def _status_line(index: int, count: int, trajectory: Trajectory) -> str:
     )
 
 
+DEFAULT_ALGORITHM = "mca1"
+"""The demo's algorithm when ``--algorithm`` is not given: the paper's cheapest."""
+
+FALLBACK_ALGORITHM = "exact"
+"""Run from the same start when the default algorithm does not reach a target: MCA1
+converges only where the Theorem's ρ stays below 1 along the path (Shoham & Koren), which a
+robot nobody designed for it need not meet; both runs are reported, so the lesson is kept."""
+
+
+def _segment(
+    args: argparse.Namespace, robot: Robot, partition: Partition, q: np.ndarray, target: np.ndarray
+) -> list[Trajectory]:
+    """The runs of one segment: the algorithm asked for, or the default and, when it does not
+    converge, :data:`FALLBACK_ALGORITHM` from the same start (the last run is the one kept)."""
+    settings = {"partition": partition, "dt": args.dt, "gain": args.gain, "max_steps": args.max_steps, "tol": args.tol}
+    runs = [servo(robot, q, target, algorithm=args.algorithm or DEFAULT_ALGORITHM, **settings)]
+    if args.algorithm is None and not runs[0].converged:
+        runs.append(servo(robot, q, target, algorithm=FALLBACK_ALGORITHM, **settings))
+    return runs
+
+
 FRAMED_TARGETS = 20
 """The viewer's opening view frames the robot and at most this many of the first targets."""
 
@@ -132,7 +153,30 @@ def _targets(args: argparse.Namespace, robot: Robot, partition: Partition, start
         yield pin.SE3(pin.rpy.rpyToMatrix(roll, pitch, yaw), np.array([x, y, z])).homogeneous
         return
     for k in range(args.targets):
-        yield nearby_target(robot, partition, args.seed + k, start=start)[1]
+        yield _servable_target(args, robot, partition, args.seed + k, start)
+
+
+TARGET_DRAWS = 8
+"""Draws per demo target: the first whose exact resolved-rate motion from the start reaches it
+within the limits is taken, else the last."""
+
+
+def _servable_target(
+    args: argparse.Namespace, robot: Robot, partition: Partition, seed: int, start: np.ndarray
+) -> np.ndarray:
+    """A :func:`~pinrate.kinematics.targets.nearby_target` that a resolved-rate motion reaches:
+    its configuration is within reach joint by joint, but the tip's way to it may pass where a
+    joint meets its limit (a target across the first joint's axis asks that joint for half a
+    turn). Each draw is tried by a dry run of the exact algorithm from the start (the motion
+    the segment's algorithms approximate); the seeds of the draws are ``seed``, then ``seed``
+    plus multiples of a large prime, so ``--seed`` stays reproducible."""
+    target = start
+    for draw in range(TARGET_DRAWS):
+        target = nearby_target(robot, partition, seed + draw * 1_000_003, start=start)[1]
+        dry_run = servo(robot, start, target, algorithm="exact", partition=partition, dt=args.dt, tol=args.tol)
+        if dry_run.converged:
+            break
+    return target
 
 
 def _record_file(path: str) -> Path:
@@ -193,28 +237,25 @@ def demo(args: argparse.Namespace) -> int:
             targets = itertools.chain(framed, targets)
         all_converged = True
         for index, target in enumerate(targets, start=1):
-            trajectory = servo(
-                robot,
-                q,
-                target,
-                algorithm=args.algorithm,
-                partition=partition,
-                dt=args.dt,
-                gain=args.gain,
-                max_steps=args.max_steps,
-                tol=args.tol,
-            )
+            runs = _segment(args, robot, partition, q, target)
+            trajectory = runs[-1]
             position, rpy = target[:3, 3], pin.rpy.matrixToRpy(target[:3, :3])
             print(
                 f"target     xyz {np.array2string(position, precision=4)} m   "
                 f"rpy {np.array2string(rpy, precision=4)} rad (world)"
             )
-            if count == 1 and viewer is None:
-                print(summary(robot, trajectory))
-            else:
-                if index == 1:
-                    print("partition  " + partition.describe(robot).replace("\n", "\n           "))
-                print(_status_line(index, count, trajectory), flush=True)
+            if index == 1 and not (count == 1 and viewer is None):
+                print("partition  " + partition.describe(robot).replace("\n", "\n           "))
+            for number, run in enumerate(runs):
+                if number:
+                    print(
+                        f"fallback   {runs[0].algorithm} did not reach it: {FALLBACK_ALGORITHM} from the same start "
+                        "(--algorithm chooses one and keeps to it)"
+                    )
+                print(
+                    summary(robot, run) if count == 1 and viewer is None else _status_line(index, count, run),
+                    flush=True,
+                )
             if viewer is not None:
                 viewer.play(trajectory, target=target, speed=args.speed)
             all_converged &= trajectory.converged

@@ -118,7 +118,12 @@ def _demo(demo: argparse.ArgumentParser) -> None:
         "TCP frame (default: the name table's, or the chain's end)",
         "frame the twist is expressed in (default: the tip)",
     )
-    demo.add_argument("--algorithm", default="mca1", choices=ALGORITHMS)
+    demo.add_argument(
+        "--algorithm",
+        choices=ALGORITHMS,
+        help="default: mca1, and for a target it does not reach (the Theorem's rho >= 1 on the way) "
+        "exact from the same start, both runs reported",
+    )
     demo.add_argument(
         "--target",
         nargs=6,
