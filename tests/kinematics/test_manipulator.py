@@ -265,7 +265,7 @@ def test_a_tip_fixed_to_the_world_is_a_load_error_naming_it(tip: str) -> None:
 
 
 def test_generic_configurations_are_one_deterministic_set_within_the_limits() -> None:
-    from pinrate.kinematics.manipulator import GENERIC_SAMPLES
+    from pinrate.kinematics.kinematic_model import GENERIC_SAMPLES
 
     robot = pinrate.load("panda")
     configurations = robot.generic_configurations()
