@@ -1,5 +1,6 @@
 """A URDF manipulator as the user meets it: the kinematics of its tip and sensor frames
-(:mod:`.kinematic_model`), its visual and collision geometry, and a picklable spec.
+(:mod:`.kinematic_model`), a home inside every joint's limits and non-singular (:mod:`.home`),
+its visual and collision geometry, and a picklable spec.
 """
 
 from __future__ import annotations
@@ -13,7 +14,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import PinrateError
+from .home import find_home
 from .kinematic_model import KinematicModel, not_a_robot
+from .partition import Partition
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,14 @@ class Robot(KinematicModel):
             groups and prismatic joints at the end of the chain) that the default tip and the
             automatic partition leave out (:mod:`.frames`).
         arm_mimics: the mimic joints that follow an arm joint (parallelogram links), left out too.
+
+    With ``search_home`` (the default), :meth:`home` is inside every joint's limits and
+    non-singular whenever such a configuration exists (:func:`.home.find_home`): the first of
+    ``home_candidates`` (label, q) that is, else one found near neutral. Without
+    ``home_candidates``, a ``"home"`` in ``reference_configurations`` is the home as given;
+    otherwise the candidates are the model's own reference configurations (an SRDF read with
+    ``pinocchio.loadReferenceConfigurations``), ``home`` first, then by name. So a model built
+    by hand (``pinrate.Robot(model)``) gets the home :func:`pinrate.load` gives a URDF file.
     """
 
     def __init__(
@@ -66,6 +77,8 @@ class Robot(KinematicModel):
         reference_configurations: Mapping[str, np.ndarray] | None = None,
         mimic: Mapping[str, str] | None = None,
         srdf_path: Path | None = None,
+        search_home: bool = True,
+        home_candidates: Sequence[tuple[str, np.ndarray]] | None = None,
     ) -> None:
         super().__init__(
             model, tip=tip, sensor=sensor, name=name, reference_configurations=reference_configurations, mimic=mimic
@@ -75,6 +88,19 @@ class Robot(KinematicModel):
         self._package_dirs = list(package_dirs)
         self.srdf_path = srdf_path if srdf_path is not None and srdf_path.is_file() else None
         self._geometry: dict[pin.GeometryType, pin.GeometryModel] = {}
+        if search_home and (home_candidates is not None or "home" not in self.reference_configurations):
+            candidates = self._model_references() if home_candidates is None else home_candidates
+            q, self.home_choice = find_home(self, Partition.auto(self), candidates)
+            self.reference_configurations["home"] = q
+
+    def _model_references(self) -> list[tuple[str, np.ndarray]]:
+        """The model's reference configurations (label, q): ``home`` first, the others by name."""
+        references = {entry.key(): np.array(entry.data(), dtype=float) for entry in self.model.referenceConfigurations}
+        return [
+            (f"the model's reference configuration {key!r}", references[key])
+            for key in sorted(references, key=lambda key: (key != "home", key))
+            if references[key].shape == (self.nq,)
+        ]
 
     def spec(self) -> RobotSpec:
         """A picklable recipe of this robot's kinematics (for worker processes and Dask)."""
