@@ -17,6 +17,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -104,6 +105,7 @@ class KinematicModel:
                 f"robot {self.name!r}: tip frame {self.tip!r} has no moving joint between it and the world, "
                 "so no joint rate can move it; choose a frame on the arm"
             )
+        self._warn_of_mimics_on_the_tip_path(mimic or {})
         self.sensor_id = self.tip_id if sensor is None else resolve_frame(model, sensor, role="sensor", robot=self.name)
         self.sensor = model.frames[self.sensor_id].name
         self._joint_ids = {model.names[j]: j for j in range(1, model.njoints)}
@@ -113,6 +115,22 @@ class KinematicModel:
         self.home_choice = (
             "the 'home' reference configuration" if "home" in self.reference_configurations else "neutral"
         )
+
+    def _warn_of_mimics_on_the_tip_path(self, mimic: Mapping[str, str]) -> None:
+        """A warning naming each mimic joint between the base and the tip (a closed chain's
+        follower on the way to the tip). Pinocchio models it as a joint of its own, which pinrate
+        does not drive (its rate stays 0), so the tip Jacobian lacks the multiplier times its
+        column in its leader's column: every step that moves the leader goes wrong."""
+        chain = self.tip_chain()
+        on_path = [follower for follower in self.arm_mimics if follower in chain]
+        if on_path:
+            named = ", ".join(f"{follower!r} (mimics {mimic.get(follower, '?')!r})" for follower in on_path)
+            warnings.warn(
+                f"robot {self.name!r}: mimic joint {named} lies between the base and the tip {self.tip!r}; "
+                "pinrate does not drive mimic joints yet, so the Jacobian misses its motion and the tip does not "
+                "go where it is told when its leader moves. Choose a tip before it (tip=...)",
+                stacklevel=4,
+            )
 
     # ------------------------------------------------------------------ sizes and names
     @property
