@@ -60,3 +60,17 @@ def dual_arm_torso() -> str:
     )
     arms = six_dof("arm_left_", "mount_left") + six_dof("arm_right_", "mount_right")
     return f'<robot name="dual_arm"><link name="base_link"/>{torso}{mounts}{arms}</robot>'
+
+
+def planar_mimic_on_the_tip_path() -> str:
+    """A planar 3R arm whose joint_2 mimics joint_1 (multiplier 0.5, offset 0.1): a closed
+    chain's follower between the base and the tip tool0 (issue 24)."""
+    follower = '<mimic joint="joint_1" multiplier="0.5" offset="0.1"/>'
+    return (
+        '<robot name="planar_mimic"><link name="base_link"/>'
+        + joint("joint_1", "base_link", "link_1", "0 0 0", "0 0 1")
+        + joint("joint_2", "link_1", "link_2", "0.5 0 0", "0 0 1", follower)
+        + joint("joint_3", "link_2", "link_3", "0.4 0 0", "0 0 1")
+        + joint("tool_joint", "link_3", "tool0", "0.3 0 0", "0 0 1", kind="fixed")
+        + "</robot>"
+    )

@@ -149,6 +149,11 @@ struct Kinematics {
   // pinrate.kinematics.spatial.pose_error: [R_s^T (p_target - p_tip); R_s^T log3(R_target R_tip^T)].
   Eigen::Matrix<double, 6, 1> pose_error(const SE3 &target) const {
     Eigen::Matrix<double, 6, 1> error;
+    // Exactly zero at the target: log3 of R^T R (the identity to rounding) is about 1e-16 rad.
+    if (world_T_tip.rotation() == target.rotation() && world_T_tip.translation() == target.translation()) {
+      error.setZero();
+      return error;
+    }
     const SE3 sensor_T_target = world_T_sensor.actInv(target);
     if (sensor_is_tip) {
       error.head<3>() = sensor_T_target.translation();

@@ -25,6 +25,7 @@ import pytest
 import pinrate
 from compiled_core import needs_core, path
 from pinrate.control.controller import Controller
+from pinrate.control.servo_run import DIVERGENCE_FACTOR, STALL_IMPROVEMENT, ServoLog
 from pinrate.control.singularity import STRATEGIES
 from pinrate.control.status import Status
 from pinrate.kinematics.targets import nearby_target
@@ -329,3 +330,35 @@ def test_the_cause_of_a_stall_in_the_same_words(wrist: str) -> None:
     python, compiled = both(robot, q0, robot.pose(q_target), wrist=wrist)
     assert_same(robot, python, compiled, bitwise=False)
     assert python.reason.endswith("; at a joint limit on 500 of its 500 steps: held at a position limit: theta4")
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_a_first_compiled_step_at_the_target_moves_nothing(name: str) -> None:
+    """Issue 24: the core's first step toward the tip's own pose (pose error zero; tol 0 so
+    that the loop steps instead of stopping converged) applies rates that are exactly 0 and
+    leaves q unchanged to the bit, with the position and velocity limits on."""
+    robot = load(name)
+    home = robot.home()
+    for algorithm in pinrate.ALGORITHMS:
+        core = Controller(robot, algorithm=algorithm).compiled()
+        if core is None:
+            continue  # this configuration runs on Python: test_controller covers it
+        log = ServoLog(home, robot.nv, 2)
+        core.run(
+            q0=home,
+            target=np.ascontiguousarray(robot.pose(home)),
+            gain=1.0,
+            tol=0.0,
+            stall_steps=10,
+            max_steps=1,
+            divergence_factor=DIVERGENCE_FACTOR,
+            stall_improvement=STALL_IMPROVEMENT,
+            step_number=0,
+            best=math.inf,
+            progress=math.inf,
+            progress_step=0,
+            **log.arguments(),
+        )
+        assert log.position[0] == 0.0 and log.orientation[0] == 0.0, algorithm
+        assert not log.rates[0].any(), (algorithm, log.rates[0])
+        assert np.array_equal(log.q[1], home), algorithm

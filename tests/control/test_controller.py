@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import pinrate
+import pinrate.robots.loading
 from pinrate.control import Controller, PoseGoal, Status
 from pinrate.control.status import SEVERITY, most_severe
 
@@ -141,3 +144,24 @@ def test_an_option_changed_after_construction_is_refused() -> None:
         with pytest.raises(AttributeError, match=f"Controller.{name} is fixed"):
             setattr(controller, name, value)
     assert controller.dt == 0.01 and controller.posture.gain == 1.0
+
+
+# ---------------------------------------------------------------- a command of nothing moves nothing
+
+
+@pytest.mark.parametrize("name", pinrate.robots.loading.known_names())
+def test_a_zero_first_step_from_home_moves_nothing(name: str) -> None:
+    """Issue 24: the very first step from home with a zero twist, or with a pose goal at the
+    tip's own pose, returns rates that are exactly 0 and q unchanged to the bit, on every
+    catalogue robot and algorithm, with the collision monitor and every limit on."""
+    robot = pinrate.load(name)
+    home = robot.home()
+    for algorithm in pinrate.ALGORITHMS:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a robot without collision geometry says so
+            controller = Controller(robot, algorithm=algorithm, collision=True, position_limits=True)
+        for command in (np.zeros(controller.index.rows.size), PoseGoal.of(robot.pose(home))):
+            step = controller.step(home, command)
+            assert not step.joint_rates.any(), (algorithm, command, step.joint_rates, step.status)
+            assert np.array_equal(step.q, home), (algorithm, command)
+            assert step.status is Status.OK, (algorithm, command, step.status, step.detail)

@@ -10,6 +10,7 @@ import pytest
 
 import pinrate
 from pinrate.robots import EXAMPLE_ROBOTS
+from pinrate.robots.catalog import example_robot_path
 from support import DATA, finite_difference_jacobian
 
 
@@ -265,7 +266,7 @@ def test_a_tip_fixed_to_the_world_is_a_load_error_naming_it(tip: str) -> None:
 
 
 def test_generic_configurations_are_one_deterministic_set_within_the_limits() -> None:
-    from pinrate.kinematics.manipulator import GENERIC_SAMPLES
+    from pinrate.kinematics.kinematic_model import GENERIC_SAMPLES
 
     robot = pinrate.load("panda")
     configurations = robot.generic_configurations()
@@ -278,3 +279,65 @@ def test_generic_configurations_are_one_deterministic_set_within_the_limits() ->
     only = robot.generic_configurations(["panda_joint2"])
     moved = np.flatnonzero((only != robot.neutral()).any(axis=0))
     assert moved.tolist() == [robot.model.joints[robot.joint_id("panda_joint2")].idx_q]
+
+
+# ---------------------------------------------------------------- the home of a model built by hand
+
+
+def smallest_singular_value(robot: pinrate.Robot, q: np.ndarray) -> float:
+    """The partition Jacobian's smallest singular value at q, by numpy's SVD of the rows and
+    columns the partition names (independent of pinrate.kinematics.home)."""
+    partition = pinrate.Partition.auto(robot)
+    rows = ["xyz".index(a) for a in partition.linear] + [3 + "xyz".index(a) for a in partition.angular]
+    columns = [robot.model.joints[robot.model.getJointId(j)].idx_v for j in partition.arm + partition.wrist]
+    return float(np.linalg.svd(robot.jacobian(q)[np.ix_(rows, columns)], compute_uv=False)[-1])
+
+
+def inside_every_limit(robot: pinrate.Robot, q: np.ndarray) -> bool:
+    lower, upper = robot.position_limits()
+    return bool(np.all((lower <= q) & (q <= upper)))
+
+
+def test_a_hand_built_model_gets_the_home_that_load_gives() -> None:
+    """Issue 24: pinrate.Robot(model) (Pink's route) searches the home as pinrate.load does.
+    The panda's neutral pose puts joint4 outside its limits [-3.07, -0.07] rad."""
+    urdf = example_robot_path(EXAMPLE_ROBOTS["panda"].urdf)
+    robot = pinrate.Robot(pin.buildModelFromUrdf(str(urdf)))
+    assert not inside_every_limit(robot, robot.neutral())
+    home = robot.home()
+    assert inside_every_limit(robot, home), robot.home_choice
+    assert smallest_singular_value(robot, home) >= 1e-3  # the contract's floor
+    np.testing.assert_array_equal(home, pinrate.load(urdf).home())  # the same search, the same draws
+    assert "searched" in robot.home_choice
+
+
+def test_a_model_with_reference_configurations_takes_them_as_load_does(panda: pinrate.Robot) -> None:
+    # pinrate.load("panda") read the SRDF into the model: its 'default' pose is the curated home.
+    robot = pinrate.Robot(panda.model)
+    np.testing.assert_array_equal(robot.home(), panda.home())
+    assert "'default'" in robot.home_choice
+
+
+def test_a_given_home_is_kept_and_the_search_can_be_turned_off(panda: pinrate.Robot) -> None:
+    given = panda.home() + 0.01
+    assert np.array_equal(pinrate.Robot(panda.model, reference_configurations={"home": given}).home(), given)
+    unsearched = pinrate.Robot(panda.model, search_home=False)
+    assert np.array_equal(unsearched.home(), unsearched.neutral()) and unsearched.home_choice == "neutral"
+
+
+@pytest.mark.parametrize("algorithm", ["exact", "mca1"])
+def test_servo_and_a_teleop_step_from_a_hand_built_home(algorithm: str) -> None:
+    robot = pinrate.Robot(pin.buildModelFromUrdf(str(example_robot_path(EXAMPLE_ROBOTS["panda"].urdf))))
+    home = robot.home()
+    step = pinrate.Controller(robot, algorithm=algorithm).step(home, np.array([0.05, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    assert step.status == pinrate.Status.OK
+    # 5 cm/s along the sensor's x for dt = 0.01 s: the tip moves 0.5 mm along x (first order;
+    # the second-order term is below 1e-6 m at these rates).
+    moved = robot.pose(home)[:3, :3].T @ (robot.pose(step.q)[:3, 3] - robot.pose(home)[:3, 3])
+    np.testing.assert_allclose(moved, [5e-4, 0.0, 0.0], atol=2e-6)
+    target = robot.pose(home)
+    target[:3, 3] += [0.0, 0.05, -0.05]
+    # gain 1/s: the exact error decays as exp(-t), from 0.071 m to tol 1e-4 in ln(707) = 6.6 s
+    # (656 steps); mca1's coupling (rho 0.3) leaves an orientation error that takes 1151 steps.
+    trajectory = pinrate.servo(robot, home, target, algorithm=algorithm, max_steps=2000)
+    assert trajectory.converged, trajectory.reason

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics.manipulator import GENERIC_SEED, Robot
+from ..kinematics.kinematic_model import GENERIC_SEED
+from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
 
 _ZERO = 1e-9  # an entry is zero when below this times (1 + max |J|)

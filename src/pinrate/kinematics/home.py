@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .manipulator import Robot
+from .kinematic_model import KinematicModel
 from .partition import Partition, split_blocks
 
 WELL_CONDITIONED = 1e-3
@@ -85,7 +85,7 @@ RANK_TOLERANCE = 1e-9
 """A singular value below this fraction of the largest does not count towards a rank."""
 
 
-def generic_ranks(robot: Robot, partition: Partition) -> Ranks:
+def generic_ranks(robot: KinematicModel, partition: Partition) -> Ranks:
     """The ranks J, A and W have almost everywhere: a robot whose joints can never span a
     direction (Stretch's four collinear telescoping joints, a 5-DOF arm's six rows) is judged
     on the directions it can span."""
@@ -97,7 +97,7 @@ def generic_ranks(robot: Robot, partition: Partition) -> Ranks:
     return ranks[0], ranks[1], ranks[2]
 
 
-def _singular_values(robot: Robot, partition: Partition, q: np.ndarray) -> list[np.ndarray]:
+def _singular_values(robot: KinematicModel, partition: Partition, q: np.ndarray) -> list[np.ndarray]:
     """Singular values (descending) of the partition's J, A and W at q; empty for an empty matrix."""
     index = partition.resolve(robot)
     jacobian = robot.jacobian_unchecked(q)[np.ix_(index.rows, index.columns)]
@@ -105,7 +105,7 @@ def _singular_values(robot: Robot, partition: Partition, q: np.ndarray) -> list[
     return [np.linalg.svd(M, compute_uv=False) if M.size else np.zeros(0) for M in (jacobian, A, W)]
 
 
-def _home_quality(robot: Robot, partition: Partition, q: np.ndarray, ranks: Ranks) -> HomeQuality:
+def _home_quality(robot: KinematicModel, partition: Partition, q: np.ndarray, ranks: Ranks) -> HomeQuality:
     """:class:`HomeQuality` at q (one Jacobian, one SVD per matrix). Each matrix is judged by
     its singular value number rank (``ranks`` from :func:`generic_ranks`) rather than its
     last, so directions it can never span do not make every configuration singular."""
@@ -135,7 +135,7 @@ def srdf_states(path: Path) -> list[str]:
 
 
 def find_home(
-    robot: Robot, partition: Partition, named: Sequence[tuple[str, np.ndarray]] = ()
+    robot: KinematicModel, partition: Partition, named: Sequence[tuple[str, np.ndarray]] = ()
 ) -> tuple[np.ndarray, str]:
     """(q, why), q inside every joint's position limits: the first of ``named`` (label, q)
     that is within the limits and well-conditioned, else neutral (each joint it puts outside
@@ -205,7 +205,7 @@ def _searched(quality: HomeQuality, fraction: float, which: str) -> str:
     )
 
 
-def _outside_limits(robot: Robot, q: np.ndarray) -> list[str]:
+def _outside_limits(robot: KinematicModel, q: np.ndarray) -> list[str]:
     """The joints ``q`` puts outside their position limits."""
     outside = []
     for joint in robot.joint_names:
@@ -215,7 +215,7 @@ def _outside_limits(robot: Robot, q: np.ndarray) -> list[str]:
     return outside
 
 
-def _near_a_limit(robot: Robot, partition: Partition, q: np.ndarray) -> bool:
+def _near_a_limit(robot: KinematicModel, partition: Partition, q: np.ndarray) -> bool:
     """Whether a partition joint of q is within LIMIT_MARGIN of its range from a limit."""
     for joint in partition.joints:
         limits = robot.joint_limits(joint)

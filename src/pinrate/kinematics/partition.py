@@ -18,14 +18,14 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .manipulator import Robot, check_robot
+from .kinematic_model import KinematicModel, check_model
 
 _AXES = "xyz"
 _ZERO_TOL = 1e-9  # a Jacobian entry counts as zero below this times (1 + max |J|)
 
 # Per-robot caches kept here, not on the robot: they go when the robot goes.
-_INDEX_CACHE: weakref.WeakKeyDictionary[Robot, dict[Partition, PartitionIndex]] = weakref.WeakKeyDictionary()
-_AUTO_CACHE: weakref.WeakKeyDictionary[Robot, Partition] = weakref.WeakKeyDictionary()
+_INDEX_CACHE: weakref.WeakKeyDictionary[KinematicModel, dict[Partition, PartitionIndex]] = weakref.WeakKeyDictionary()
+_AUTO_CACHE: weakref.WeakKeyDictionary[KinematicModel, Partition] = weakref.WeakKeyDictionary()
 
 Selector = tuple[Any, Any]
 """An index of J[rows, columns]: two slices, or ``np.ix_`` index arrays."""
@@ -142,14 +142,14 @@ class Partition:
         """Row indices into the 6-row twist: linear axes (0-2) then angular axes (3-5)."""
         return [_AXES.index(a) for a in self.linear] + [3 + _AXES.index(a) for a in self.angular]
 
-    def resolve(self, robot: Robot) -> PartitionIndex:
+    def resolve(self, robot: KinematicModel) -> PartitionIndex:
         """Row and column indices of this partition in ``robot``'s Jacobian (cached per robot).
 
         Raises:
             InputError: a joint the robot does not have, or one off the chain from the base to
                 the tip (it cannot move the tip: its column of J is zero).
         """
-        cache = _INDEX_CACHE.setdefault(check_robot(robot), {})
+        cache = _INDEX_CACHE.setdefault(check_model(robot), {})
         index = cache.get(self)
         if index is None:
             chain = robot.tip_chain()
@@ -173,7 +173,7 @@ class Partition:
             cache[self] = index
         return index
 
-    def blocks(self, robot: Robot, J: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def blocks(self, robot: KinematicModel, J: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(A, B, U, W) of eq. 19: A = J[linear, arm], B = J[linear, wrist],
         U = J[angular, arm], W = J[angular, wrist]."""
         index = self.resolve(robot)
@@ -190,7 +190,7 @@ class Partition:
     def __str__(self) -> str:
         return self.describe()
 
-    def describe(self, robot: Robot | None = None) -> str:
+    def describe(self, robot: KinematicModel | None = None) -> str:
         """The partition in three lines; with ``robot``, the block shapes count velocity
         components, so a multi-DOF joint (planar: 3, floating: 6) counts as many columns."""
 
@@ -217,20 +217,21 @@ class Partition:
         return "\n".join(lines)
 
     @classmethod
-    def auto(cls, robot: Robot) -> Partition:
+    def auto(cls, robot: KinematicModel) -> Partition:
         """The default partition of ``robot`` (cached on the robot).
 
         Only joints of the tip's chain whose Jacobian column is non-zero somewhere take part,
         less the gripper and hand joints (zero-range, mimic groups at the end of the chain;
-        :attr:`Robot.hand_joints`), less the mimic joints that follow an arm joint
-        (:attr:`Robot.arm_mimics`: a joint that parallelogram links mimic stays, its links do
-        not), and less multi-DOF joints (a ``planar`` or ``floating`` base: the paper's arm and wrist
-        are the manipulator's 1-DOF joints; a :class:`Partition` naming one includes it);
-        twist components whose rows are zero at every sampled configuration are dropped.
+        :attr:`~pinrate.kinematics.manipulator.Robot.hand_joints`), less the mimic joints
+        that follow an arm joint (:attr:`~pinrate.kinematics.manipulator.Robot.arm_mimics`: a
+        joint that parallelogram links mimic stays, its links do not), and less multi-DOF
+        joints (a ``planar`` or ``floating`` base: the paper's arm and wrist are the
+        manipulator's 1-DOF joints; a :class:`Partition` naming one includes it); twist
+        components whose rows are zero at every sampled configuration are dropped.
         With n joints, m linear and k angular components, the wrist is the last
         min(k, max(n - m, 0)) joints and the arm the ones before them.
         """
-        cached = _AUTO_CACHE.get(check_robot(robot))
+        cached = _AUTO_CACHE.get(check_model(robot))
         if cached is not None:
             return cached
         samples = np.vstack([robot.generic_configurations(), robot.home()])
@@ -258,10 +259,10 @@ class Partition:
         return partition
 
 
-def partition_for(robot: Robot, partition: object) -> Partition:
+def partition_for(robot: KinematicModel, partition: object) -> Partition:
     """``partition``, or the robot's automatic one when it is None; InputError for anything
     else (a string such as "auto" included) and for a robot that is not a Robot."""
-    check_robot(robot)
+    check_model(robot)
     if partition is None:
         return Partition.auto(robot)
     if not isinstance(partition, Partition):

@@ -18,7 +18,12 @@ def pose_error(world_T_tip: pin.SE3, world_T_sensor: pin.SE3, target: pin.SE3) -
     With S the sensor pose: position R_s^T (p_target - p_tip) = (S^-1 T_target).p -
     (S^-1 T_tip).p and rotation R_s^T log3(R_target R_tip^T) = log3(R_a R_b^T) with
     R_a = R_s^T R_target and R_b = R_s^T R_tip (log3 commutes with conjugation).
+
+    Exactly zero when the tip is at the target: R_tip^T R_tip is the identity only to
+    rounding, and its log3 (about 1e-16 rad) would otherwise move a robot told to stay.
     """
+    if np.array_equal(world_T_tip.homogeneous, target.homogeneous):
+        return np.zeros(6)
     sensor_T_target = world_T_sensor.actInv(target)
     if world_T_sensor is world_T_tip:
         return np.concatenate([sensor_T_target.translation, pin.log3(sensor_T_target.rotation)])

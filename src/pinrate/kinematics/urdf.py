@@ -25,9 +25,8 @@ import pinocchio as pin
 
 from ..checks import check_count
 from ..errors import LoadError
-from .home import find_home, srdf_states
+from .home import srdf_states
 from .manipulator import Robot, RobotSpec
-from .partition import Partition
 from .urdf_meshes import confine_meshes, mesh_roots
 from .urdf_structure import check_structure, max_joints_default
 
@@ -241,6 +240,13 @@ def robot_from_urdf(
     if "home" in references:
         references["home"] = _into_limits(model, references["home"])
     robot_name = name or root.get("name") or label
+    named: list[tuple[str, np.ndarray]] = []
+    if search_home:
+        states = srdf_states(srdf_path) if srdf_path is not None and srdf_path.is_file() else []
+        order = [state for state in (["home"] if "home" in states else []) + states if state in references]
+        named = [
+            (f"SRDF group_state {state!r}", _into_limits(model, references[state])) for state in dict.fromkeys(order)
+        ]
     robot = Robot(
         model,
         tip=tip,
@@ -252,16 +258,9 @@ def robot_from_urdf(
         reference_configurations=references,
         mimic=_mimic_joints(root),
         srdf_path=srdf_path,
+        search_home=search_home,
+        home_candidates=named,
     )
-    if search_home:
-        states = srdf_states(srdf_path) if srdf_path is not None and srdf_path.is_file() else []
-        order = [state for state in (["home"] if "home" in states else []) + states if state in references]
-        named = [
-            (f"SRDF group_state {state!r}", _into_limits(model, references[state])) for state in dict.fromkeys(order)
-        ]
-        q, why = find_home(robot, Partition.auto(robot), named)
-        robot.reference_configurations["home"] = q
-        robot.home_choice = why
     return robot
 
 
