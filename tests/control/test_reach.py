@@ -18,8 +18,9 @@ AL5D = Path(__file__).parent.parent / "data" / "third_party" / "rtb_al5d_robot.u
 def test_a_two_link_arm_cannot_turn_its_hand_at_will() -> None:
     """Fig. 1's arm: rows vx, vy, ωz and two joints. A twist J q̇ is made exactly (OK); adding
     n, normal to both of J's columns (their cross product: the one direction out of reach),
-    makes it unachievable; the exact step makes the J q̇ part (its least squares) and says it
-    misses n."""
+    makes it unachievable. Position comes first (A square, W 1x0): the two joints make the
+    commanded velocity, the only rates that do (A invertible), and the step says the rotation
+    about z it misses."""
     robot = pinrate.robots.two_link_planar()
     controller = Controller(robot, algorithm="exact", max_linear_speed=np.inf, max_angular_speed=np.inf)
     assert (controller.partition.linear, controller.partition.angular) == ("xy", "z")
@@ -30,13 +31,15 @@ def test_a_two_link_arm_cannot_turn_its_hand_at_will() -> None:
     assert step.status is Status.OK
     normal = np.cross(jacobian[:, 0], jacobian[:, 1])
     normal *= 0.05 / np.linalg.norm(normal)
-    step = controller.step(q, reachable + normal)
+    commanded = reachable + normal
+    step = controller.step(q, commanded)
     assert step.status is Status.UNACHIEVABLE_TWIST
-    np.testing.assert_allclose(jacobian @ step.joint_rates, reachable, atol=1e-12)
-    missed = [float(value) for value in re.findall(r"misses by (\S+) m/s and (\S+) rad/s", step.detail)[0]]
-    assert missed == pytest.approx(
-        [np.linalg.norm(normal[:2]), abs(normal[2])], rel=5e-3
-    )  # 3 digits: half a unit in 100
+    made = jacobian @ step.joint_rates
+    np.testing.assert_allclose(made[:2], commanded[:2], atol=1e-12)  # rates ~0.5 rad/s: rounding ~1e-16
+    missed = commanded[2] - made[2]
+    said = re.findall(r"rotation about ([+-]1\.000) z .* misses by (\S+) rad/s", step.detail)[0]
+    assert float(said[0]) == np.sign(missed)
+    assert float(said[1]) == pytest.approx(abs(missed), rel=5e-3)  # 3 digits: half a unit in 100
 
 
 @pytest.mark.parametrize("name", ["two_link_planar", "cylindrical", "spherical", "al5d"])

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..kinematics.partition import split_blocks
 from .conditioning import truncated_pinv
+from .rates import position_first_rates, position_first_solves
 from .reference import Inverter
 from .registry import REGISTRY
 
@@ -56,9 +57,13 @@ def filtered_rates(
 
     J is (m + k, n) in partition order (linear rows, angular rows; arm columns, wrist
     columns; ``n_arm`` arm columns). ``scale`` (m + k,) weights the rows of J where the
-    algorithm inverts J itself (exact, dls): rates = (S J)^inv (S twist).
+    algorithm inverts J itself (exact, dls): rates = (S J)^inv (S twist). With a square A and
+    a tall W, exact, schur and dls put position first, A and the complement inverted by ``invert``.
     """
     entry = REGISTRY[algorithm]
+    m_k, n = J.shape
+    if position_first_solves(algorithm, m, n_arm, m_k - m, n - n_arm):
+        return position_first_rates(J, m, n_arm, twist, algorithm, invert)
     if entry.whole is not None:
         return invert(J * scale[:, None], "J") @ (scale * twist)
     assert entry.blocks is not None
