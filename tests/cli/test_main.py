@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -119,3 +120,15 @@ def test_a_replay_that_cannot_be_written_is_one_error_line(capsys: pytest.Captur
 def test_python_dash_m_pinrate_is_the_command_line() -> None:
     ran = subprocess.run([sys.executable, "-m", "pinrate", "--version"], capture_output=True, text=True, timeout=60)
     assert ran.returncode == 0 and ran.stdout.startswith("pinrate ") and not ran.stderr
+
+
+@pytest.mark.parametrize("algorithm", [None, "exact"])
+def test_demo_converges_on_a_five_dof_arm(algorithm: str | None, capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 24 item 4: a yaw-pitch-pitch-pitch-roll arm (6 rows, 5 joints) with the demo's
+    defaults and with exact (position first), three random reachable targets."""
+    path = Path(__file__).parent.parent / "data" / "five_dof_arm.urdf"
+    chosen = [] if algorithm is None else ["--algorithm", algorithm]
+    assert main(["demo", str(path), "--no-viewer", "--targets", "3", *chosen]) == 0
+    out = capsys.readouterr().out
+    assert out.count(" converged ") == 3, out[-2000:]
+    assert "position first" in out  # the partition's description says the rule

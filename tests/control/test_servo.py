@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -336,3 +337,18 @@ def test_a_controller_subclass_with_its_own_step_is_servoed_by_that_step(ur5: pi
     assert "steps its own way" in still.compiled_reason() and still.compiled() is None
     run = pinrate.servo(ur5, q0, target, controller=still)
     assert not run.converged and np.array_equal(run.q[-1], q0)
+
+
+@pytest.mark.parametrize("algorithm", ["exact", "schur", "dls", "mca1"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_five_dof_arm_reaches_a_reachable_pose(algorithm: str, seed: int) -> None:
+    """A yaw-pitch-pitch-pitch-roll arm (6 rows, 5 joints, position first for exact, schur and
+    dls): a pose it can reach (forward kinematics of a nearby q) is reached in position and
+    orientation, each within the servo's tol of 1e-4 (m, rad)."""
+    robot = pinrate.load(Path(__file__).parent.parent / "data" / "five_dof_arm.urdf")
+    _, target = nearby_target(robot, Partition.auto(robot), seed=seed)
+    trajectory = pinrate.servo(robot, robot.home(), target, algorithm=algorithm, max_steps=5000)
+    assert trajectory.converged, trajectory.reason
+    final = robot.pose(trajectory.q[-1])
+    assert np.linalg.norm(final[:3, 3] - target[:3, 3]) < 1e-4
+    assert rotation_angle(final[:3, :3], target[:3, :3]) < 1e-4

@@ -48,13 +48,17 @@ def partition_rates(
     twist: np.ndarray,
     algorithm: str,
     parts: closed_form.Blocks | None = None,
+    position_first: bool | None = None,
 ) -> np.ndarray:
     """Joint rates (nv,) from a sensor-frame Jacobian (6, nv) and a twist in partition order.
 
     Joints outside the partition get rate 0. ``parts`` may hold the blocks as nested lists
     already taken from J (when ``index.small``). On a partition with a square A and a tall W,
-    exact, schur and dls put position first (:func:`position_first_rates`). Raises SingularBlockError (without q: the
-    caller adds it) when a block algorithm meets a singular square block.
+    exact, schur and dls put position first (:func:`position_first_rates`); ``position_first``
+    False keeps them from it (a controller's partition with joints held at a limit solves as
+    the partition it came from: a 6-DOF arm with a wrist joint held keeps its least squares).
+    Raises SingularBlockError (without q: the caller adds it) when a block algorithm meets a
+    singular square block.
     """
     entry = REGISTRY[algorithm]
     if index.small and entry.closed_form is not None:
@@ -70,7 +74,8 @@ def partition_rates(
     if index.columns.size == 0:
         return rates
     reduced = J if index.all_rows and index.all_columns else J[np.ix_(index.rows, index.columns)]
-    if index.position_first and entry.position_first is not None:
+    first = index.position_first and position_first is not False
+    if first and entry.position_first is not None:
         rates[index.columns] = position_first_rates(reduced, index.m, index.arm_columns.size, twist, algorithm)
     elif entry.whole is not None:
         rates[index.columns] = entry.whole(reduced, twist)

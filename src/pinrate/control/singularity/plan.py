@@ -71,7 +71,16 @@ def solve_planned(
         else ColumnMap.of(index.arm_columns.size, index.wrist_columns.size, dropped, plan.merged)
     )
     reduced = context.reduced(observation.jacobian) @ columns.matrix
-    solved = filtered_rates(reduced, index.m, columns.n_arm, twist, context.algorithm, plan.invert, context.row_scale)
+    solved = filtered_rates(
+        reduced,
+        index.m,
+        columns.n_arm,
+        twist,
+        context.algorithm,
+        plan.invert,
+        context.row_scale,
+        index.position_first,
+    )
     rates = np.zeros(context.robot.nv)
     rates[index.columns] = columns.matrix @ solved
     return rates
