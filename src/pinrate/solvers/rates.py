@@ -21,7 +21,7 @@ def position_first_rates(
 ) -> np.ndarray:
     """Rates (n,) of :func:`~pinrate.solvers.reference.position_first` for a J (m + k, n) in
     partition order with a square A (``n_arm`` = m arm columns) and a tall W, the blocks
-    inverted by ``invert`` (None: the algorithm's own, :attr:`.registry.Algorithm.position_first`).
+    inverted by ``invert`` (None: the algorithm's own, ``position_first`` of :class:`~.registry.Algorithm`).
     Where A is singular, ``exact`` falls back to its least squares over the whole J (it never
     raises); schur raises SingularBlockError as it does for a singular square block."""
     if invert is None:
@@ -38,7 +38,7 @@ def position_first_rates(
 
 def position_first_solves(algorithm: str, m: int, n_arm: int, k: int, n_wrist: int) -> bool:
     """Whether ``algorithm`` solves these block shapes by
-    :func:`~pinrate.solvers.reference.position_first` (:attr:`.registry.Algorithm.position_first`)."""
+    :func:`~pinrate.solvers.reference.position_first` (``position_first`` of :class:`~.registry.Algorithm`)."""
     return REGISTRY[algorithm].position_first is not None and position_first_applies(m, n_arm, k, n_wrist)
 
 
