@@ -6,6 +6,7 @@ import dataclasses
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -175,3 +176,15 @@ def test_a_demo_target_the_exact_motion_does_not_reach_is_drawn_again(monkeypatc
     target = demo._servable_target(args, robot, partition, 7, robot.home())
     assert len(dry_runs) == 2 and all(run.algorithm == "exact" for run in dry_runs)
     np.testing.assert_array_equal(target, nearby_target(robot, partition, 7 + 1_000_003)[1])
+
+
+@pytest.mark.parametrize("algorithm", [None, "exact"])
+def test_demo_converges_on_a_five_dof_arm(algorithm: str | None, capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 24 item 4: a yaw-pitch-pitch-pitch-roll arm (6 rows, 5 joints) with the demo's
+    defaults and with exact (position first), three random reachable targets."""
+    path = Path(__file__).parent.parent / "data" / "five_dof_arm.urdf"
+    chosen = [] if algorithm is None else ["--algorithm", algorithm]
+    assert main(["demo", str(path), "--no-viewer", "--targets", "3", *chosen]) == 0
+    out = capsys.readouterr().out
+    assert out.count(" converged ") == 3, out[-2000:]
+    assert "position first" in out  # the partition's description says the rule

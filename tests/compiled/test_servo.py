@@ -153,6 +153,22 @@ def test_a_partition_that_cannot_make_every_twist_runs_on_python() -> None:
         assert "cannot make every twist" in str(controller.compiled_reason())
 
 
+@pytest.mark.parametrize("algorithm", ["exact", "schur", "dls", "mca1"])
+def test_a_five_dof_arm_puts_position_first_on_both_paths(algorithm: str) -> None:
+    """A 5-DOF arm's steps (position first, the rotation given up said) are Python's on both
+    paths: the core, which solves no tall W that way, is refused with the reason, and the
+    runs agree bit for bit."""
+    robot = pinrate.load(DATA / "five_dof_arm.urdf")
+    with path("compiled"):
+        controller = Controller(robot, algorithm=algorithm)
+        assert controller.compiled() is None
+        assert "cannot make every twist" in str(controller.compiled_reason())
+    _, target = nearby_target(robot, pinrate.Partition.auto(robot), seed=2)
+    python, compiled = both(robot, robot.home(), target, algorithm=algorithm, max_steps=3000)
+    assert python.converged, python.reason
+    assert_same(robot, python, compiled, bitwise=True)
+
+
 def test_limits_and_singularities_hand_steps_back(python_steps: list[int]) -> None:
     """Far targets: joints run onto their limits, rates are scaled, the arm passes near its
     singularities; those steps go back to Python, the rest stay compiled, and the runs agree."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -344,3 +345,21 @@ def test_a_tiny_gain_is_not_an_error_of_the_stall_time_nobody_gave(ur5: pinrate.
     # as "stall_time must be ..." (or raised OverflowError); STALL_MAX_STEPS caps it.
     trajectory = pinrate.servo(ur5, ur5.home(), ur5.pose(ur5.random_configuration(0)), gain=gain, max_steps=50)
     assert not trajectory.converged and trajectory.reason.startswith("max_steps")
+
+
+@pytest.mark.parametrize("algorithm", ["exact", "schur", "dls", "mca1"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_five_dof_arm_reaches_a_reachable_pose(algorithm: str, seed: int) -> None:
+    """A yaw-pitch-pitch-pitch-roll arm (6 rows, 5 joints, position first for exact, schur and
+    dls): a pose it can reach (forward kinematics of a nearby q) is reached in position and
+    orientation, each within the servo's tol of 1e-4 (m, rad). The trajectory keeps each
+    step's words: on the way, the pose error's rotation is not all the arm's to make."""
+    robot = pinrate.load(Path(__file__).parent.parent / "data" / "five_dof_arm.urdf")
+    _, target = nearby_target(robot, Partition.auto(robot), seed=seed)
+    trajectory = pinrate.servo(robot, robot.home(), target, algorithm=algorithm, max_steps=5000)
+    assert trajectory.converged, trajectory.reason
+    final = robot.pose(trajectory.q[-1])
+    assert np.linalg.norm(final[:3, 3] - target[:3, 3]) < 1e-4
+    assert rotation_angle(final[:3, :3], target[:3, :3]) < 1e-4
+    said = "position first" if algorithm != "mca1" else "the joints cannot make"
+    assert any(said in detail for detail in trajectory.detail)

@@ -198,3 +198,18 @@ def test_a_mimic_gripper_stays_out_while_the_mimicked_shoulder_stays_in(tmp_path
     assert robot.tip == "tool0"
     partition = Partition.auto(robot)
     assert partition.joints == tuple(f"joint_{i}" for i in range(1, 7))
+
+
+def test_a_five_dof_arm_puts_position_first() -> None:
+    """Issue 24 item 4: yaw, three pitches and a roll, six rows: A 3x3, W 3x2, position first
+    (the description says so); a 6-DOF arm's square blocks do not."""
+    robot = pinrate.load(Path(__file__).parent.parent / "data" / "five_dof_arm.urdf")
+    partition = Partition.auto(robot)
+    assert partition.arm == ("base_yaw", "shoulder_pitch", "elbow_pitch")
+    assert partition.wrist == ("wrist_pitch", "wrist_roll")
+    assert (partition.linear, partition.angular) == ("xyz", "xyz")
+    assert partition.resolve(robot).position_first
+    assert "position first" in partition.describe(robot)
+    ur5 = pinrate.load("ur5")
+    assert not Partition.auto(ur5).resolve(ur5).position_first
+    assert "position first" not in Partition.auto(ur5).describe(ur5)

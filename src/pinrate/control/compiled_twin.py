@@ -91,7 +91,8 @@ def reason(controller: Any, options: tuple[str, ...]) -> str | None:
         return (
             "the partition's joints cannot make every twist (generic rank "
             f"{controller.context.ranks['J']} for {controller.index.rows.size} components): each step's "
-            "residual is judged on the Python path (Status.UNACHIEVABLE_TWIST)"
+            "residual is judged, and a tall W's position first solved, on the Python path "
+            "(Status.UNACHIEVABLE_TWIST)"
         )
     return None
 

@@ -123,7 +123,13 @@ class StepContext:
             linear=partition.linear,
             angular=partition.angular,
         )
-        return partition_rates(observation.jacobian, reduced.resolve(self.robot), twist, self.algorithm)
+        return partition_rates(
+            observation.jacobian,
+            reduced.resolve(self.robot),
+            twist,
+            self.algorithm,
+            position_first=self.index.position_first,
+        )
 
 
 __all__ = ["StepContext"]

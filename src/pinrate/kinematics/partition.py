@@ -60,6 +60,14 @@ def pseudo_g_is_exact(m: int, n_arm: int, k: int, n_wrist: int) -> bool:
     return m <= n_arm and k >= n_wrist
 
 
+def position_first_applies(m: int, n_arm: int, k: int, n_wrist: int) -> bool:
+    """A square and not empty, W tall (fewer wrist joints than angular rows: a 5-DOF arm's
+    3x2 W, an arm with no wrist for rows of Ω): no joint rates make every twist, and the
+    linear rows come first. Position is made exactly through A and the angular rows in least
+    squares over the wrist rates that leave it (:func:`pinrate.solvers.reference.position_first`)."""
+    return 0 < m == n_arm and k > n_wrist
+
+
 @dataclass(frozen=True)
 class PartitionIndex:
     """A partition resolved against one robot: row and column indices into J (6, nv)."""
@@ -76,6 +84,7 @@ class PartitionIndex:
     small: bool = field(init=False)  # square blocks of size <= 3: closed-form kernels apply
     square: bool = field(init=False)  # A and W square, as the Theorem assumes (else the error map)
     pseudo_g: bool = field(init=False)  # pseudo_g_is_exact for these blocks
+    position_first: bool = field(init=False)  # position_first_applies for these blocks
     selectors: tuple[Selector, ...] = field(init=False)  # A, B, U, W in J
 
     def __post_init__(self) -> None:
@@ -88,6 +97,11 @@ class PartitionIndex:
         set_(self, "small", square_and_small(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
         set_(self, "square", self.m == self.arm_columns.size and self.k == self.wrist_columns.size)
         set_(self, "pseudo_g", pseudo_g_is_exact(self.m, self.arm_columns.size, self.k, self.wrist_columns.size))
+        set_(
+            self,
+            "position_first",
+            position_first_applies(self.m, self.arm_columns.size, self.k, self.wrist_columns.size),
+        )
         set_(self, "all_columns", columns.tolist() == list(range(self.nv)))
         set_(self, "all_rows", self.rows.tolist() == list(range(6)))
 
@@ -209,6 +223,12 @@ class Partition:
             else "not square: A^+ and W^+ are pseudo-inverses, and convergence is judged by the error map "
             "I - J K (the Theorem assumes square blocks)"
         )
+        if position_first_applies(self.m, n_arm, self.k, n_wrist):
+            test += (
+                f"; position first: {n_arm + n_wrist} joints for {self.m + self.k} twist components, so the "
+                "linear rows are made exactly and the angular ones in least squares over the motions that keep "
+                "them (exact, schur, dls)"
+            )
         lines = [
             f"arm ({len(self.arm)} joints, drive linear {self.linear or 'none'} through A): {joints(self.arm)}",
             f"wrist ({len(self.wrist)} joints, drive angular {self.angular or 'none'} through W): {joints(self.wrist)}",

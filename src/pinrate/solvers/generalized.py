@@ -22,6 +22,7 @@ import numpy as np
 
 from ..kinematics.partition import split_blocks
 from .conditioning import truncated_pinv
+from .rates import position_first_rates, position_first_solves
 from .reference import Inverter
 from .registry import REGISTRY
 
@@ -50,15 +51,29 @@ def damped_inverter(damping: float) -> Inverter:
 
 
 def filtered_rates(
-    J: np.ndarray, m: int, n_arm: int, twist: np.ndarray, algorithm: str, invert: Inverter, scale: np.ndarray
+    J: np.ndarray,
+    m: int,
+    n_arm: int,
+    twist: np.ndarray,
+    algorithm: str,
+    invert: Inverter,
+    scale: np.ndarray,
+    position_first: bool = False,
 ) -> np.ndarray:
     """Rates (n,) of J's columns for ``twist`` (m + k,), the algorithm's inversions done by ``invert``.
 
     J is (m + k, n) in partition order (linear rows, angular rows; arm columns, wrist
     columns; ``n_arm`` arm columns). ``scale`` (m + k,) weights the rows of J where the
-    algorithm inverts J itself (exact, dls): rates = (S J)^inv (S twist).
+    algorithm inverts J itself (exact, dls): rates = (S J)^inv (S twist). ``position_first``:
+    the partition puts position first (its own blocks, before columns were merged or
+    dropped); where these blocks still have a square A and a tall W, exact, schur and dls
+    then solve by :func:`~.rates.position_first_rates`, A and the complement inverted by
+    ``invert``. (A 6-DOF partition whose wrist pair was merged keeps its least squares.)
     """
     entry = REGISTRY[algorithm]
+    m_k, n = J.shape
+    if position_first and position_first_solves(algorithm, m, n_arm, m_k - m, n - n_arm):
+        return position_first_rates(J, m, n_arm, twist, algorithm, invert)
     if entry.whole is not None:
         return invert(J * scale[:, None], "J") @ (scale * twist)
     assert entry.blocks is not None

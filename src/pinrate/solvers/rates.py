@@ -10,10 +10,36 @@ import numpy as np
 from ..checks import check_vector
 from ..errors import SingularBlockError
 from ..kinematics.manipulator import Robot
-from ..kinematics.partition import Partition, PartitionIndex, partition_for, split_blocks
+from ..kinematics.partition import Partition, PartitionIndex, partition_for, position_first_applies, split_blocks
 from . import closed_form, reference
 from .error_map import THEOREM_ALGORITHMS, error_map
 from .registry import REGISTRY, check_algorithm
+
+
+def position_first_rates(
+    J: np.ndarray, m: int, n_arm: int, twist: np.ndarray, algorithm: str, invert: reference.Inverter | None = None
+) -> np.ndarray:
+    """Rates (n,) of :func:`~pinrate.solvers.reference.position_first` for a J (m + k, n) in
+    partition order with a square A (``n_arm`` = m arm columns) and a tall W, the blocks
+    inverted by ``invert`` (None: the algorithm's own, ``position_first`` of :class:`~.registry.Algorithm`).
+    Where A is singular, ``exact`` falls back to its least squares over the whole J (it never
+    raises); schur raises SingularBlockError as it does for a singular square block."""
+    if invert is None:
+        invert = REGISTRY[algorithm].position_first
+        assert invert is not None
+    try:
+        arm, wrist = reference.position_first(*split_blocks(J, m, n_arm), twist[:m], twist[m:], invert=invert)
+    except SingularBlockError:
+        if algorithm != "exact":
+            raise
+        return reference.exact(J, twist)
+    return np.concatenate([arm, wrist])
+
+
+def position_first_solves(algorithm: str, m: int, n_arm: int, k: int, n_wrist: int) -> bool:
+    """Whether ``algorithm`` solves these block shapes by
+    :func:`~pinrate.solvers.reference.position_first` (``position_first`` of :class:`~.registry.Algorithm`)."""
+    return REGISTRY[algorithm].position_first is not None and position_first_applies(m, n_arm, k, n_wrist)
 
 
 def partition_rates(
@@ -22,12 +48,17 @@ def partition_rates(
     twist: np.ndarray,
     algorithm: str,
     parts: closed_form.Blocks | None = None,
+    position_first: bool | None = None,
 ) -> np.ndarray:
     """Joint rates (nv,) from a sensor-frame Jacobian (6, nv) and a twist in partition order.
 
     Joints outside the partition get rate 0. ``parts`` may hold the blocks as nested lists
-    already taken from J (when ``index.small``). Raises SingularBlockError (without q: the
-    caller adds it) when a block algorithm meets a singular square block.
+    already taken from J (when ``index.small``). On a partition with a square A and a tall W,
+    exact, schur and dls put position first (:func:`position_first_rates`); ``position_first``
+    False keeps them from it (a controller's partition with joints held at a limit solves as
+    the partition it came from: a 6-DOF arm with a wrist joint held keeps its least squares).
+    Raises SingularBlockError (without q: the caller adds it) when a block algorithm meets a
+    singular square block.
     """
     entry = REGISTRY[algorithm]
     if index.small and entry.closed_form is not None:
@@ -43,7 +74,10 @@ def partition_rates(
     if index.columns.size == 0:
         return rates
     reduced = J if index.all_rows and index.all_columns else J[np.ix_(index.rows, index.columns)]
-    if entry.whole is not None:
+    first = index.position_first and position_first is not False
+    if first and entry.position_first is not None:
+        rates[index.columns] = position_first_rates(reduced, index.m, index.arm_columns.size, twist, algorithm)
+    elif entry.whole is not None:
         rates[index.columns] = entry.whole(reduced, twist)
     else:
         assert entry.blocks is not None

@@ -100,6 +100,37 @@ def schur(
     return arm, W_inv @ (omega - U @ arm)
 
 
+def position_first(
+    A: np.ndarray,
+    B: np.ndarray,
+    U: np.ndarray,
+    W: np.ndarray,
+    v: np.ndarray,
+    omega: np.ndarray,
+    invert: Inverter = inverse,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Position exact, orientation in least squares over the motions that keep it (task
+    priority by blocks, for a square A and a tall W: a 5-DOF arm's 3x3 A and 3x2 W):
+
+        S = W - U A^-1 B                               (the Schur complement of A)
+        qdot_wrist = S^+ (Ω - U A^-1 v)
+        qdot_arm   = A^-1 (v - B qdot_wrist)
+
+    Every rate vector whose linear rows make v is (A^-1 (v - B w), w) for some wrist rates w,
+    and its angular rows miss Ω by (Ω - U A^-1 v) - S w; S^+ takes the w of least miss
+    (the least-norm one where S loses rank). For square blocks this is eq. 20's N form,
+    N = S^-1, L = -A^-1 B N, and gives J^-1 s. Error: e_v = 0 and
+    e_Ω = (I - S S^+)(Ω - U A^-1 v), in the sensor frame's axes (rad/s): the rotation about
+    the directions S cannot make (for a 3x2 S of rank 2, its left null vector).
+
+    Raises:
+        SingularBlockError: A is singular (by ``invert``'s rule; a filtering inverter never raises).
+    """
+    A_inv = invert(A, "A")
+    wrist = invert(W - U @ A_inv @ B, "W - U A^-1 B") @ (omega - U @ (A_inv @ v))
+    return A_inv @ (v - B @ wrist), wrist
+
+
 def mca1(
     A: np.ndarray,
     B: np.ndarray,
@@ -177,6 +208,15 @@ def dls(J: np.ndarray, twist: np.ndarray, damping: float = DLS_DAMPING) -> np.nd
     if J.size == 0:
         return np.zeros(J.shape[1])
     return J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(rows), twist)
+
+
+def damped(M: np.ndarray, block: str) -> np.ndarray:
+    """M# = M^T (M M^T + λ² I)^-1, λ = :data:`DLS_DAMPING`: :func:`dls`'s inverse of a block
+    (the ``block`` name is unused: it is finite for every M, so it raises nothing)."""
+    rows, cols = M.shape
+    if rows == 0 or cols == 0:
+        return np.zeros((cols, rows))
+    return dls(M, np.eye(rows))
 
 
 def convergence_matrices(A: np.ndarray, B: np.ndarray, U: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

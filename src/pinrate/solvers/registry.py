@@ -24,7 +24,13 @@ class Algorithm:
 
     Exactly one of ``whole`` (acts on the partition's J at once) and ``blocks`` (acts on
     A, B, U, W of eq. 19) is set; ``closed_form`` is the float kernel that replaces
-    ``blocks`` when A and W are square of size at most 3.
+    ``blocks`` when A and W are square of size at most 3. ``position_first``: on a
+    partition with A square and W tall (no rates make every twist,
+    :func:`~pinrate.kinematics.partition.position_first_applies`) the algorithm solves by
+    :func:`~pinrate.solvers.reference.position_first` instead, its blocks inverted by this
+    inverter: position exact (up to the damping, for dls), orientation in least squares over
+    what is left. The MCAs keep their own equations there (with W^+), as the papers state
+    them: MCA1 makes the velocity exactly (eq. 28), MCA2 and MCA3 do not.
     """
 
     name: str
@@ -32,19 +38,24 @@ class Algorithm:
     whole: WholeSolver | None = None
     blocks: BlockSolver | None = None
     closed_form: closed_form.Kernel | None = None
+    position_first: reference.Inverter | None = None
 
 
 REGISTRY: dict[str, Algorithm] = {
     algorithm.name: algorithm
     for algorithm in (
         Algorithm(
-            "exact", "J^-1 s, least squares where J is singular or not square (eq. 4, 18)", whole=reference.exact
+            "exact",
+            "J^-1 s, least squares where J is singular or not square (eq. 4, 18); position first with a tall W",
+            whole=reference.exact,
+            position_first=reference.inverse,
         ),
         Algorithm(
             "schur",
             "exact inverse by blocks, Schur complement of W (eq. 20)",
             blocks=reference.schur,
             closed_form=closed_form.schur,
+            position_first=reference.inverse,
         ),
         Algorithm(
             "mca1",
@@ -59,7 +70,12 @@ REGISTRY: dict[str, Algorithm] = {
             closed_form=closed_form.mca2,
         ),
         Algorithm("mca3", "K ~ A^-1, N ~ W^-1 (eq. 51-52)", blocks=reference.mca3, closed_form=closed_form.mca3),
-        Algorithm("dls", "damped least squares, finite everywhere", whole=reference.dls),
+        Algorithm(
+            "dls",
+            "damped least squares, finite everywhere; position first with a tall W",
+            whole=reference.dls,
+            position_first=reference.damped,
+        ),
     )
 }
 """Every algorithm by name: its summary and its solvers (numpy, and closed form where it has one)."""

@@ -78,7 +78,14 @@ def solve_planned(
 
     def solved(command: np.ndarray) -> np.ndarray:
         partial = filtered_rates(
-            system, index.m, columns.n_arm, command, context.algorithm, plan.invert, context.row_scale
+            system,
+            index.m,
+            columns.n_arm,
+            command,
+            context.algorithm,
+            plan.invert,
+            context.row_scale,
+            index.position_first,
         )
         return columns.matrix @ partial
 
