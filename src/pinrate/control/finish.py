@@ -82,6 +82,7 @@ class Finish:
             hit = self.positions.clamp(next_q, observation.q, rates)
             if hit and mimics:
                 mimics.carry(observation.q, next_q, rates, self.dt)
+            mimics.settle(next_q)
             if hit and Status.JOINT_LIMIT not in statuses:
                 statuses.append(Status.JOINT_LIMIT)
                 details.append(hit)

@@ -76,6 +76,8 @@ class Follower:
     leader_q_index: int
     leader_v_index: int
     leader_nq: int
+    lower: float  # its own position limits (rad or m; infinite for a continuous joint)
+    upper: float
 
 
 def _value(q: np.ndarray, index: int, nq: int) -> np.ndarray:
@@ -125,8 +127,15 @@ class MimicCoupling:
         followers = []
         for follower, relation in relations.items():
             joint, leader = model.joints[model.getJointId(follower)], model.joints[model.getJointId(relation.leader)]
+            bounds = (
+                (float(model.lowerPositionLimit[joint.idx_q]), float(model.upperPositionLimit[joint.idx_q]))
+                if joint.nq == 1
+                else (-math.inf, math.inf)
+            )
             followers.append(
-                Follower(follower, relation, joint.idx_q, joint.idx_v, joint.nq, leader.idx_q, leader.idx_v, leader.nq)
+                Follower(
+                    follower, relation, joint.idx_q, joint.idx_v, joint.nq, leader.idx_q, leader.idx_v, leader.nq, *bounds
+                )
             )
         self.followers: tuple[Follower, ...] = tuple(sorted(followers, key=lambda follower: follower.v_index))
         self.relations: dict[str, Mimic] = {follower.name: follower.relation for follower in self.followers}
@@ -165,6 +174,13 @@ class MimicCoupling:
             rate = follower.relation.multiplier * rates[follower.leader_v_index]
             rates[follower.v_index] = rate
             _write(next_q, follower.q_index, follower.nq, _value(q, follower.q_index, follower.nq) + rate * dt)
+
+    def settle(self, next_q: np.ndarray) -> None:
+        """Each follower of ``next_q`` (nq,) inside its own limits, in place: its leader's
+        limits keep it there (:func:`coupled_interval`) but for rounding (an ulp)."""
+        for follower in self.followers:
+            if follower.nq == 1:
+                next_q[follower.q_index] = min(max(next_q[follower.q_index], follower.lower), follower.upper)
 
     def follow(
         self, configurations: np.ndarray, limits: Mapping[str, tuple[float, float] | None], leader: str | None = None

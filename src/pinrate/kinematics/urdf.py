@@ -257,7 +257,7 @@ def robot_from_urdf(
         urdf_text=geometry_text,
         package_dirs=package_dirs,
         reference_configurations=references,
-        mimic=_mimic_joints(root, label),
+        mimic=_mimic_joints(root),
         srdf_path=srdf_path,
         search_home=search_home,
         home_candidates=named,
@@ -265,28 +265,18 @@ def robot_from_urdf(
     return robot
 
 
-def _mimic_joints(root: ET.Element, label: str) -> dict[str, Mimic]:
+def _mimic_joints(root: ET.Element) -> dict[str, Mimic]:
     """Joint -> its :class:`~.mimic.Mimic` relation, from the URDF's ``<mimic joint=...
-    multiplier=... offset=...>`` elements (multiplier 1 and offset 0 where not given; a value
-    that is not a finite number is a LoadError naming the joint). Pinocchio models them as
-    independent joints; :mod:`.mimic` keeps the relation, :func:`.frames.hand_joints` tells a
-    hand's from an arm's."""
+    multiplier=... offset=...>`` elements (multiplier 1 and offset 0 where not given; Pinocchio
+    has refused a value that is not a finite number before this runs). Pinocchio models them
+    as independent joints; :mod:`.mimic` keeps the relation, :func:`.frames.hand_joints` tells
+    a hand's from an arm's."""
     pairs = {}
     for joint in root.findall("joint"):
         mimic = joint.find("mimic")
         if mimic is not None and joint.get("name") and mimic.get("joint"):
-            name = joint.get("name", "")
-            values = []
-            for attribute, default in (("multiplier", 1.0), ("offset", 0.0)):
-                text = mimic.get(attribute)
-                try:
-                    value = default if text is None else float(text)
-                except ValueError:
-                    value = math.nan
-                if not math.isfinite(value):
-                    raise LoadError(f"{label}: joint {name!r}: <mimic {attribute}={text!r}> is not a finite number")
-                values.append(value)
-            pairs[name] = Mimic(mimic.get("joint", ""), values[0], values[1])
+            multiplier, offset = float(mimic.get("multiplier", "1")), float(mimic.get("offset", "0"))
+            pairs[joint.get("name", "")] = Mimic(mimic.get("joint", ""), multiplier, offset)
     return pairs
 
 
