@@ -1,6 +1,8 @@
 """The end of every control step (:mod:`pinrate.control.controller`'s stages 6 to 8, after the
 position limits' hold and the decelerating strategies' look-ahead), twist or joint command
-alike: velocity limits (one scale factor), acceleration limits (a blend from the last rates),
+alike: the mimic joints driven by their leaders (rate = multiplier x the leader's, so q keeps
+q_mimic = m q_leader + o: :mod:`pinrate.kinematics.mimic`), velocity limits (one scale
+factor), acceleration limits (a blend from the last rates),
 self-collision, integration over dt, the clamp to the position limits, the status; and the
 halt, which a step ends with instead where it must not move."""
 

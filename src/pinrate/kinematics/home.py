@@ -163,7 +163,7 @@ def find_home(
     return home, "; ".join([why, *passed_over])
 
 
-def _search(robot: Robot, partition: Partition, ranks: Ranks) -> tuple[np.ndarray, str]:
+def _search(robot: KinematicModel, partition: Partition, ranks: Ranks) -> tuple[np.ndarray, str]:
     """find_home without named poses: neutral if comfortable, else the seeded search."""
     neutral = robot.follow_leaders(robot.neutral())
     moved = _outside_limits(robot, neutral, coupled=True)

@@ -211,7 +211,12 @@ class KinematicModel:
         the fixed seed :data:`~pinrate.kinematics.kinematic_model.GENERIC_SEED` within the limits
         of ``joints`` (all moving joints by default; the others at neutral). One set for every
         such test, so they agree."""
-        return np.vstack([self.follow_leaders(self.neutral()), self.sample_configurations(GENERIC_SAMPLES, GENERIC_SEED, joints=joints)])
+        return np.vstack(
+            [
+                self.follow_leaders(self.neutral()),
+                self.sample_configurations(GENERIC_SAMPLES, GENERIC_SEED, joints=joints),
+            ]
+        )
 
     def joint_limits(self, joint: str) -> tuple[float, float] | None:
         """The finite position limits of a 1-DOF joint with one coordinate, else None

@@ -125,8 +125,8 @@ class MimicCoupling:
                 continue
             relations[follower] = relation
         followers = []
-        for follower, relation in relations.items():
-            joint, leader = model.joints[model.getJointId(follower)], model.joints[model.getJointId(relation.leader)]
+        for name, relation in relations.items():
+            joint, leader = model.joints[model.getJointId(name)], model.joints[model.getJointId(relation.leader)]
             bounds = (
                 (float(model.lowerPositionLimit[joint.idx_q]), float(model.upperPositionLimit[joint.idx_q]))
                 if joint.nq == 1
@@ -134,14 +134,15 @@ class MimicCoupling:
             )
             followers.append(
                 Follower(
-                    follower, relation, joint.idx_q, joint.idx_v, joint.nq, leader.idx_q, leader.idx_v, leader.nq, *bounds
+                    name, relation, joint.idx_q, joint.idx_v, joint.nq, leader.idx_q, leader.idx_v, leader.nq, *bounds
                 )
             )
         self.followers: tuple[Follower, ...] = tuple(sorted(followers, key=lambda follower: follower.v_index))
         self.relations: dict[str, Mimic] = {follower.name: follower.relation for follower in self.followers}
         self._by_leader: dict[str, tuple[Follower, ...]] = {}
-        for follower in self.followers:
-            self._by_leader[follower.relation.leader] = (*self._by_leader.get(follower.relation.leader, ()), follower)
+        for resolved in self.followers:
+            leader_name = resolved.relation.leader
+            self._by_leader[leader_name] = (*self._by_leader.get(leader_name, ()), resolved)
 
     def __bool__(self) -> bool:
         return bool(self.followers)
