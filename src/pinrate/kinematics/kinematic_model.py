@@ -93,8 +93,7 @@ class KinematicModel:
         self._has_unit_pairs = model.nq != model.nv
         if not self.joint_names:
             raise LoadError(f"robot {self.name!r} has no moving joint: every joint is fixed, nothing to control")
-        self.mimics = MimicCoupling(model, mimic)
-        """The mimic joints and their relations to their leaders (:mod:`.mimic`)."""
+        self.mimics = MimicCoupling(model, mimic)  # the mimic joints' relations (Robot's docstring)
         choice = default_tip_frame(model, self.mimics.leaders)
         self.hand_joints, self.arm_mimics = choice.hand_joints, choice.arm_mimics
         if tip is None:
