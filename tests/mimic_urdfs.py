@@ -6,8 +6,10 @@ from __future__ import annotations
 LIMIT = '<limit lower="-2.5" upper="2.5" effort="1" velocity="2"/>'
 
 
-def joint(name: str, parent: str, child: str, xyz: str, axis: str, inner: str = "", kind: str = "revolute") -> str:
-    limit = LIMIT if kind != "fixed" else ""
+def joint(
+    name: str, parent: str, child: str, xyz: str, axis: str, inner: str = "", kind: str = "revolute", limit: str = LIMIT
+) -> str:
+    limit = limit if kind != "fixed" else ""
     return (
         f'<link name="{child}"/><joint name="{name}" type="{kind}"><parent link="{parent}"/>'
         f'<child link="{child}"/><origin xyz="{xyz}"/><axis xyz="{axis}"/>{limit}{inner}</joint>'
@@ -62,14 +64,17 @@ def dual_arm_torso() -> str:
     return f'<robot name="dual_arm"><link name="base_link"/>{torso}{mounts}{arms}</robot>'
 
 
-def planar_mimic_on_the_tip_path() -> str:
+def planar_mimic_on_the_tip_path(follower_limits: tuple[float, float] = (-2.5, 2.5)) -> str:
     """A planar 3R arm whose joint_2 mimics joint_1 (multiplier 0.5, offset 0.1): a closed
-    chain's follower between the base and the tip tool0 (issue 24)."""
+    chain's follower between the base and the tip tool0 (issue 24); links 0.5, 0.4, 0.3 m along
+    x, every axis z. ``follower_limits``: joint_2's (rad)."""
     follower = '<mimic joint="joint_1" multiplier="0.5" offset="0.1"/>'
+    lower, upper = follower_limits
+    follower_limit = f'<limit lower="{lower}" upper="{upper}" effort="1" velocity="2"/>'
     return (
         '<robot name="planar_mimic"><link name="base_link"/>'
         + joint("joint_1", "base_link", "link_1", "0 0 0", "0 0 1")
-        + joint("joint_2", "link_1", "link_2", "0.5 0 0", "0 0 1", follower)
+        + joint("joint_2", "link_1", "link_2", "0.5 0 0", "0 0 1", follower, limit=follower_limit)
         + joint("joint_3", "link_2", "link_3", "0.4 0 0", "0 0 1")
         + joint("tool_joint", "link_3", "tool0", "0.3 0 0", "0 0 1", kind="fixed")
         + "</robot>"

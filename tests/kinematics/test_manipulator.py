@@ -41,7 +41,12 @@ def test_ur5_home_is_not_singular_while_zero_is(ur5: pinrate.Robot) -> None:
 def test_srdf_reference_configurations_are_exposed(panda: pinrate.Robot) -> None:
     assert "default" in panda.reference_configurations
     np.testing.assert_allclose(panda.reference_configurations["default"][3], -2.35619)
-    np.testing.assert_allclose(panda.home(), panda.reference_configurations["default"])
+    # the home is the SRDF's "default" state, its mimic finger (panda_finger_joint2 = 1 x
+    # panda_finger_joint1 + 0, which the state leaves at 0) where its leader puts it
+    expected = panda.reference_configurations["default"].copy()
+    expected[8] = expected[7]
+    assert expected[8] == 0.001
+    np.testing.assert_allclose(panda.home(), expected)
 
 
 def test_joint_names_follow_the_velocity_vector(panda: pinrate.Robot) -> None:
@@ -313,8 +318,10 @@ def test_a_hand_built_model_gets_the_home_that_load_gives() -> None:
 
 def test_a_model_with_reference_configurations_takes_them_as_load_does(panda: pinrate.Robot) -> None:
     # pinrate.load("panda") read the SRDF into the model: its 'default' pose is the curated home.
-    robot = pinrate.Robot(panda.model)
+    # (A Pinocchio 3.3 model does not carry the URDF's <mimic>: the caller passes the relations.)
+    robot = pinrate.Robot(panda.model, mimic=panda.mimics.relations)
     np.testing.assert_array_equal(robot.home(), panda.home())
+    assert robot.home()[8] == robot.home()[7]  # the mimic finger follows in both
     assert "'default'" in robot.home_choice
 
 

@@ -206,10 +206,16 @@ def test_the_analysis_is_of_the_arm(name: str) -> None:
     report = analyze(robot, samples=400, points=9, tcp_samples=20, progress=False)
     assert report.partition == partition
     assert 0.0 <= report.sample.fraction <= 1.0
-    # the samples move only the arm's joints; the others stay at neutral
-    others = [i for i, joint in enumerate(robot.joint_names) if joint not in partition.joints]
+    # the samples move only the arm's joints; the others stay at neutral, but the mimic joints,
+    # which sit where their leaders put them (side links follow the arm joint they mimic)
+    others = [
+        i
+        for i, joint in enumerate(robot.joint_names)
+        if joint not in partition.joints and joint not in robot.mimics.relations
+    ]
     neutral = robot.neutral()
     np.testing.assert_array_equal(report.sample.q[:, others], np.tile(neutral[others], (400, 1)))
+    np.testing.assert_array_equal(report.sample.q, robot.follow_leaders(report.sample.q.copy()))
     region = report.region
     assert region is not None and set(region.joints) <= set(partition.joints)
     assert not np.any(np.isnan(region.spectral_radius))  # inf where a block is singular, never NaN

@@ -65,11 +65,19 @@ def core_kinematics(robot: Robot) -> Any:
     Python path is chosen.
 
     Raises:
-        UnsupportedByCoreError: the robot has a joint the core does not rebuild.
+        UnsupportedByCoreError: the robot has a joint the core does not rebuild, or a mimic
+            joint between the base and the tip (the core's Jacobian does not fold it into its
+            leader's column, :mod:`pinrate.kinematics.mimic`).
     """
     core = core_module()
     if core is None:
         return None
+    if robot.folds_mimics:
+        on_path = [name for name in robot.tip_chain() if name in robot.mimics.relations]
+        raise UnsupportedByCoreError(
+            f"mimic joint {', '.join(map(repr, on_path))} lies between the base and the tip, and the compiled "
+            "core's Jacobian does not fold a mimic joint into its leader's column: the Python path runs"
+        )
     kinematics = _cache.get(robot)
     if kinematics is None:
         kinds, parents, axes, placements = _joint_arrays(robot)

@@ -78,8 +78,9 @@ def joint_rate_vector(
 class JointJog:
     """Joints moved at given rates, the others held still: ``rates`` maps joint names to rad/s
     (revolute) or m/s (prismatic). Any 1-DOF joint of the robot may be jogged, in or out of
-    the partition. Limits apply as to every step (position limits hold a joint at its limit,
-    a velocity limit scales all rates alike)."""
+    the partition, but a mimic joint (its leader moves it; jog the leader). Limits apply as to
+    every step (position limits hold a joint at its limit, a velocity limit scales all rates
+    alike)."""
 
     rates: Mapping[str, float] = field(default_factory=dict)
 

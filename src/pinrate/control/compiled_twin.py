@@ -75,7 +75,9 @@ def reason(controller: Any, options: tuple[str, ...]) -> str | None:
     """Why this controller's loops run on Python though the core may be there (None when
     nothing in the configuration stops the core): an option missing from
     :data:`COMPILED_COVERAGE` (not covered: it fails closed, whatever the backend), the
-    core's reason, or the first option the table does not cover at its value."""
+    core's reason (a mimic joint between the base and the tip among them), the first option
+    the table does not cover at its value, a mimic joint whose leader the partition moves
+    (the core integrates q without driving it), or a partition that cannot make every twist."""
     for option in options:
         if option not in COMPILED_COVERAGE:
             return f"the option {option!r} is not known to the compiled core: the Python path runs"
@@ -87,6 +89,16 @@ def reason(controller: Any, options: tuple[str, ...]) -> str | None:
     for covered, reason in COMPILED_COVERAGE.values():
         if covered is not None and not covered(controller):
             return reason
+    driven = [
+        follower.name
+        for follower in controller.robot.mimics.followers
+        if follower.relation.leader in controller.partition.joints
+    ]
+    if driven:
+        return (
+            f"mimic joint {', '.join(map(repr, driven))} follows a joint of the partition, and the compiled core "
+            "does not drive mimic joints when it integrates q: the Python path runs"
+        )
     if controller.context.ranks["J"] < controller.index.rows.size:
         return (
             "the partition's joints cannot make every twist (generic rank "

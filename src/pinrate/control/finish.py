@@ -1,6 +1,8 @@
 """The end of every control step (:mod:`pinrate.control.controller`'s stages 6 to 8, after the
 position limits' hold and the decelerating strategies' look-ahead), twist or joint command
-alike: velocity limits (one scale factor), acceleration limits (a blend from the last rates),
+alike: the mimic joints driven by their leaders (rate = multiplier x the leader's, so q keeps
+q_mimic = m q_leader + o: :mod:`pinrate.kinematics.mimic`), velocity limits (one scale
+factor), acceleration limits (a blend from the last rates),
 self-collision, integration over dt, the clamp to the position limits, the status; and the
 halt, which a step ends with instead where it must not move."""
 
@@ -55,12 +57,18 @@ class Finish:
         details: list[str],
         frozen: tuple[str, ...],
     ) -> Step:
-        """The end of every step: velocity limits (one scale factor), acceleration limits,
-        self-collision, integration over dt, the clamp to the position limits, the status."""
+        """The end of every step: the mimic joints driven by their leaders, velocity limits
+        (one scale factor), acceleration limits, self-collision, integration over dt, the clamp
+        to the position limits, the status."""
+        mimics = self.robot.mimics
+        # rate(mimic) = m rate(leader) before any limit sees the rates, and again after a stage
+        # that changes joints one by one: q keeps q_mimic = m q_leader + o (the rates said are applied).
+        rates = mimics.drive(rates.copy()) if mimics else rates
         rates = self.rate_limits.apply(rates, statuses, details)
         if self.accelerations is not None:
             rates, stopped = self.accelerations.apply(observation.q, rates, frozen, statuses, details)
             frozen = frozen + tuple(name for name in stopped if name not in frozen)
+            mimics.drive(rates)
         if self.collision is not None:
             verdict = self.collision.limit(observation.q, rates, self.dt)
             if verdict.status is Status.HALT_FOR_COLLISION:
@@ -74,6 +82,9 @@ class Finish:
             self.auxiliary.reach_extension(observation.q, next_q)
         if self.positions.enabled:
             hit = self.positions.clamp(next_q, observation.q, rates)
+            if hit and mimics:
+                mimics.carry(observation.q, next_q, rates, self.dt)
+            mimics.settle(next_q)
             if hit and Status.JOINT_LIMIT not in statuses:
                 statuses.append(Status.JOINT_LIMIT)
                 details.append(hit)

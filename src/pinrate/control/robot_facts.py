@@ -46,12 +46,14 @@ m/s) means no limit."""
 class Facts(NamedTuple):
     """What a controller needs of its robot and partition that no option changes."""
 
-    limits: tuple[Limit, ...]  # every 1-DOF joint with finite position limits (a jog may move any)
+    # every 1-DOF joint with finite position limits (a jog may move any), a leader's narrowed by its
+    # mimic joints' (Robot.coupled_limits); mimic joints follow their leaders, so none of their own
+    limits: tuple[Limit, ...]
     urdf_velocity_limits: np.ndarray  # (nv,), inf where the URDF gives none
     characteristic_length: float  # L of J at home
     ranks: tuple[int, int, int]  # generic ranks of J, A, W
     velocity_of: dict[str, int]  # joint name -> its first velocity index
-    joggable: tuple[str, ...]  # the 1-DOF joints
+    joggable: tuple[str, ...]  # the 1-DOF joints but mimic joints (their leaders move them)
     wrist_axes: tuple[Axis, ...]  # the wrist's first two rotating joints
     wrist_body: int  # the joint whose body carries the wrist centre
 
@@ -78,7 +80,9 @@ def robot_facts(robot: Robot, partition: Partition) -> Facts:
         index = partition.resolve(robot)
         limits = []
         for joint in robot.joint_names:
-            bounds = robot.joint_limits(joint)
+            if joint in robot.mimics.relations:
+                continue  # a mimic joint's limits are kept through its leader's (coupled_limits)
+            bounds = robot.coupled_limits(joint)
             if bounds is not None:
                 joint_model = model.joints[robot.joint_id(joint)]
                 limits.append(Limit(joint, joint_model.idx_q, joint_model.idx_v, *bounds))
@@ -93,7 +97,11 @@ def robot_facts(robot: Robot, partition: Partition) -> Facts:
                 characteristic_length=characteristic_length(home, index.m),
                 ranks=generic_ranks(robot, partition),
                 velocity_of={name: model.joints[robot.joint_id(name)].idx_v for name in robot.joint_names},
-                joggable=tuple(name for name in robot.joint_names if model.joints[robot.joint_id(name)].nv == 1),
+                joggable=tuple(
+                    name
+                    for name in robot.joint_names
+                    if model.joints[robot.joint_id(name)].nv == 1 and name not in robot.mimics.relations
+                ),
                 wrist_axes=wrist_axes(model, wrist_ids),
                 # The wrist centre rides on the body that carries the first wrist joint of the
                 # chain (or the tip's body without a wrist).

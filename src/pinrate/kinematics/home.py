@@ -142,10 +142,13 @@ def find_home(
     its limits moved onto the nearest one) if it is comfortable and clear of the limits, else
     the most comfortable of SEARCH_DRAWS seeded draws at the smallest distance from neutral
     (SEARCH_FRACTIONS) where one is comfortable, else the best well-conditioned draw of all,
-    else that neutral."""
+    else that neutral. Every mimic joint is at m q_leader + o, then inside its own limits
+    (:meth:`~.kinematic_model.KinematicModel.follow_leaders`); a leader is drawn where its
+    mimic joints stay inside theirs (:meth:`~.kinematic_model.KinematicModel.joint_range`)."""
     ranks = generic_ranks(robot, partition)
     passed_over: list[str] = []  # what a user who wrote an SRDF home needs to read when it is not taken
-    for label, q in named:
+    for label, given in named:
+        q = robot.follow_leaders(given.copy())  # its mimic joints where their leaders put them
         outside = _outside_limits(robot, q)
         quality = _home_quality(robot, partition, q, ranks)
         if not outside and quality.well_conditioned:
@@ -162,12 +165,13 @@ def find_home(
 
 def _search(robot: KinematicModel, partition: Partition, ranks: Ranks) -> tuple[np.ndarray, str]:
     """find_home without named poses: neutral if comfortable, else the seeded search."""
-    neutral = robot.neutral()
-    moved = _outside_limits(robot, neutral)
+    neutral = robot.follow_leaders(robot.neutral())
+    moved = _outside_limits(robot, neutral, coupled=True)
     for joint in moved:  # onto its nearest limit: a home is inside every joint's limits
         low, high = robot.joint_range(joint)
         index = robot.model.joints[robot.joint_id(joint)].idx_q  # a 1-DOF joint: one coordinate
         neutral[index] = min(max(neutral[index], low), high)
+    robot.follow_leaders(neutral)
     label = f"neutral, with {', '.join(moved)} moved onto the nearest limit" if moved else "neutral"
     if _home_quality(robot, partition, neutral, ranks).comfortable and not _near_a_limit(robot, partition, neutral):
         return neutral, f"{label} (well-conditioned)"
@@ -205,11 +209,15 @@ def _searched(quality: HomeQuality, fraction: float, which: str) -> str:
     )
 
 
-def _outside_limits(robot: KinematicModel, q: np.ndarray) -> list[str]:
-    """The joints ``q`` puts outside their position limits."""
+def _outside_limits(robot: KinematicModel, q: np.ndarray, *, coupled: bool = False) -> list[str]:
+    """The joints ``q`` puts outside their position limits; ``coupled``: the joints that no
+    other joint moves (not mimic joints), outside their limits narrowed by their mimic joints'
+    (:meth:`~.kinematic_model.KinematicModel.coupled_limits`)."""
     outside = []
     for joint in robot.joint_names:
-        limits = robot.joint_limits(joint)
+        if coupled and joint in robot.mimics.relations:
+            continue
+        limits = robot.coupled_limits(joint) if coupled else robot.joint_limits(joint)
         if limits is not None and not limits[0] <= q[robot.model.joints[robot.joint_id(joint)].idx_q] <= limits[1]:
             outside.append(joint)
     return outside

@@ -9,7 +9,10 @@ angular velocity, both in tip axes), so
     J_sensor = blockdiag(R, R) J_local,   R = R_world_sensor^T R_world_tip.
 
 Kinematics are Pinocchio's throughout: URDF parsing, frame placements, Jacobians and
-integration on the configuration space (continuous joints have nq = 2, nv = 1).
+integration on the configuration space (continuous joints have nq = 2, nv = 1). Mimic joints
+(URDF ``<mimic>``, q_follower = m q_leader + o) follow their leaders (:mod:`.mimic`): J is
+folded, ``J[:, leader] += m J[:, follower]`` and ``J[:, follower] = 0``, for the followers
+between the base and the tip, and the configurations made here keep the relation.
 """
 
 from __future__ import annotations
@@ -17,7 +20,6 @@ from __future__ import annotations
 import functools
 import logging
 import math
-import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -27,6 +29,7 @@ import pinocchio as pin
 from ..checks import MAX_SAMPLES, PHYSICAL_BOUND, RngLike, as_rng, check_count, check_name, check_vector
 from ..errors import InputError, LoadError, choices_hint
 from .frames import default_tip_frame, resolve_frame
+from .mimic import Mimic, MimicCoupling, coupled_interval, fold
 
 logger = logging.getLogger("pinrate")
 
@@ -70,7 +73,7 @@ class KinematicModel:
         sensor: str | None = None,
         name: str = "",
         reference_configurations: Mapping[str, np.ndarray] | None = None,
-        mimic: Mapping[str, str] | None = None,
+        mimic: Mapping[str, str | Mimic] | None = None,
     ) -> None:
         if not isinstance(model, pin.Model):
             raise InputError(f"model must be a pinocchio.Model (or use pinrate.load), not {type(model).__name__}")
@@ -90,7 +93,8 @@ class KinematicModel:
         self._has_unit_pairs = model.nq != model.nv
         if not self.joint_names:
             raise LoadError(f"robot {self.name!r} has no moving joint: every joint is fixed, nothing to control")
-        choice = default_tip_frame(model, mimic)
+        self.mimics = MimicCoupling(model, mimic)  # the mimic joints' relations (Robot's docstring)
+        choice = default_tip_frame(model, self.mimics.leaders)
         self.hand_joints, self.arm_mimics = choice.hand_joints, choice.arm_mimics
         if tip is None:
             self.tip_id = choice.frame_id
@@ -105,7 +109,7 @@ class KinematicModel:
                 f"robot {self.name!r}: tip frame {self.tip!r} has no moving joint between it and the world, "
                 "so no joint rate can move it; choose a frame on the arm"
             )
-        self._warn_of_mimics_on_the_tip_path(mimic or {})
+        self._folded = self.mimics.folded_columns(self.tip_chain())
         self.sensor_id = self.tip_id if sensor is None else resolve_frame(model, sensor, role="sensor", robot=self.name)
         self.sensor = model.frames[self.sensor_id].name
         self._joint_ids = {model.names[j]: j for j in range(1, model.njoints)}
@@ -115,22 +119,8 @@ class KinematicModel:
         self.home_choice = (
             "the 'home' reference configuration" if "home" in self.reference_configurations else "neutral"
         )
-
-    def _warn_of_mimics_on_the_tip_path(self, mimic: Mapping[str, str]) -> None:
-        """A warning naming each mimic joint between the base and the tip (a closed chain's
-        follower on the way to the tip). Pinocchio models it as a joint of its own, which pinrate
-        does not drive (its rate stays 0), so the tip Jacobian lacks the multiplier times its
-        column in its leader's column: every step that moves the leader goes wrong."""
-        chain = self.tip_chain()
-        on_path = [follower for follower in self.arm_mimics if follower in chain]
-        if on_path:
-            named = ", ".join(f"{follower!r} (mimics {mimic.get(follower, '?')!r})" for follower in on_path)
-            warnings.warn(
-                f"robot {self.name!r}: mimic joint {named} lies between the base and the tip {self.tip!r}; "
-                "pinrate does not drive mimic joints yet, so the Jacobian misses its motion and the tip does not "
-                "go where it is told when its leader moves. Choose a tip before it (tip=...)",
-                stacklevel=4,
-            )
+        if "home" in self.reference_configurations:  # its mimic joints where their leaders put them
+            self.follow_leaders(self.reference_configurations["home"])
 
     # ------------------------------------------------------------------ sizes and names
     @property
@@ -171,7 +161,26 @@ class KinematicModel:
         one inside the limits and non-singular)."""
         if "home" in self.reference_configurations:
             return self.reference_configurations["home"].copy()
-        return self.neutral()
+        return self.follow_leaders(self.neutral())
+
+    def follow_leaders(self, configurations: np.ndarray, leader: str | None = None) -> np.ndarray:
+        """Configurations (nq,) or (N, nq) with every mimic joint (of ``leader``, or all) at
+        m q_leader + o, then inside its own limits (:meth:`.mimic.MimicCoupling.follow`), in
+        place; returned."""
+        if not self.mimics:
+            return configurations
+        followers = self.mimics.followers if leader is None else self.mimics.of_leader(leader)
+        limits = {follower.name: self.joint_limits(follower.name) for follower in followers}
+        return self.mimics.follow(configurations, limits, leader)
+
+    def coupled_limits(self, joint: str) -> tuple[float, float] | None:
+        """:meth:`joint_limits`, for a leader of mimic joints narrowed to where each of them is
+        inside its own limits too (:func:`.mimic.coupled_interval`): how far the joint may go."""
+        own = self.joint_limits(joint)
+        followers = self.mimics.of_leader(joint)
+        if not followers or self.model.joints[self.joint_id(joint)].nq != 1:
+            return own
+        return coupled_interval(own, [(follower.relation, self.joint_limits(follower.name)) for follower in followers])
 
     def position_limits(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper limits of q (nq,), as Pinocchio stores them."""
@@ -185,11 +194,12 @@ class KinematicModel:
         Only ``joints`` (default: all moving joints) are drawn; the others stay at neutral.
         A 1-DOF joint without finite limits is drawn in [-pi, pi]; a continuous joint
         (nq = 2: cos, sin) by its angle in [-pi, pi]; other multi-DOF joints stay neutral.
+        Mimic joints are not drawn: they follow their leaders (:meth:`follow_leaders`).
         """
         generator = as_rng(rng)
-        samples = np.tile(self.neutral(), (check_count(count, "count", maximum=MAX_SAMPLES), 1))
+        samples = np.tile(self.follow_leaders(self.neutral()), (check_count(count, "count", maximum=MAX_SAMPLES), 1))
         for joint in self.joint_names if joints is None else joints:
-            if self.model.joints[self.joint_id(joint)].nv == 1:
+            if self.model.joints[self.joint_id(joint)].nv == 1 and joint not in self.mimics.relations:
                 self.set_joint_values(samples, joint, generator.uniform(*self.joint_range(joint), count))
         return samples
 
@@ -200,7 +210,12 @@ class KinematicModel:
         the fixed seed :data:`~pinrate.kinematics.kinematic_model.GENERIC_SEED` within the limits
         of ``joints`` (all moving joints by default; the others at neutral). One set for every
         such test, so they agree."""
-        return np.vstack([self.neutral(), self.sample_configurations(GENERIC_SAMPLES, GENERIC_SEED, joints=joints)])
+        return np.vstack(
+            [
+                self.follow_leaders(self.neutral()),
+                self.sample_configurations(GENERIC_SAMPLES, GENERIC_SEED, joints=joints),
+            ]
+        )
 
     def joint_limits(self, joint: str) -> tuple[float, float] | None:
         """The finite position limits of a 1-DOF joint with one coordinate, else None
@@ -215,12 +230,14 @@ class KinematicModel:
         return lower, upper
 
     def joint_range(self, joint: str) -> tuple[float, float]:
-        """The range a 1-DOF joint is drawn or swept over: its limits, else [-pi, pi]."""
-        return self.joint_limits(joint) or (-math.pi, math.pi)
+        """The range a 1-DOF joint is drawn or swept over: its limits (a leader's narrowed by
+        its mimic joints', :meth:`coupled_limits`), else [-pi, pi]."""
+        return self.coupled_limits(joint) or (-math.pi, math.pi)
 
     def set_joint_values(self, configurations: np.ndarray, joint: str, values: np.ndarray) -> None:
         """Write a 1-DOF joint's values (angles for a continuous joint: cos, sin) into the
-        rows of ``configurations`` (N, nq), in place."""
+        rows of ``configurations`` (N, nq), in place; the joints that mimic it follow
+        (:meth:`follow_leaders`)."""
         joint_model = self.model.joints[self.joint_id(joint)]
         if joint_model.nv != 1:
             raise InputError(f"joint {joint!r} has {joint_model.nv} DOF; only 1-DOF joints can be set by value")
@@ -234,6 +251,7 @@ class KinematicModel:
             configurations[:, i], configurations[:, i + 1] = np.cos(values), np.sin(values)
         else:
             configurations[:, i] = values
+        self.follow_leaders(configurations, joint)
 
     def random_configuration(self, rng: RngLike = None) -> np.ndarray:
         """One configuration (nq,) drawn uniformly within the joint limits."""
@@ -292,7 +310,8 @@ class KinematicModel:
         return names
 
     def integrate(self, q: np.ndarray, joint_rates: np.ndarray, dt: float) -> np.ndarray:
-        """q moved by joint_rates (nv,) for dt seconds on the configuration space."""
+        """q moved by joint_rates (nv,) for dt seconds on the configuration space (the rates
+        as given: a step drives the mimic joints first, :meth:`.mimic.MimicCoupling.drive`)."""
         return np.array(pin.integrate(self.model, q, joint_rates * dt))
 
     # ------------------------------------------------------------------ kinematics
@@ -321,13 +340,21 @@ class KinematicModel:
         """:meth:`jacobian` without the input check, for a q that already went through
         :meth:`check_q` (or was drawn by pinrate): the hot path of loops over configurations.
 
-        With the sensor at the tip this is one Pinocchio call (the LOCAL frame Jacobian).
+        With the sensor at the tip this is one Pinocchio call (the LOCAL frame Jacobian), and
+        the fold of the mimic joints between the base and the tip (:func:`.mimic.fold`).
         """
         if self.sensor_id == self.tip_id:
             jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.tip_id, pin.LOCAL)
             # eigenpy hands a one-column matrix back as a vector: keep (6, nv) for one joint.
-            return jacobian.reshape(6, 1) if self._single_column else jacobian
+            jacobian = jacobian.reshape(6, 1) if self._single_column else jacobian
+            return fold(jacobian, self._folded) if self._folded else jacobian
         return self.kinematics(q)[0]
+
+    @property
+    def folds_mimics(self) -> bool:
+        """Whether a mimic joint lies between the base and the tip, so that J is folded
+        (:func:`.mimic.fold`): a loop that makes J itself must fold it too."""
+        return bool(self._folded)
 
     def kinematics(self, q: np.ndarray) -> tuple[np.ndarray, pin.SE3, pin.SE3]:
         """(J_sensor, world_T_tip, world_T_sensor) at a checked q, in one kinematics pass.
@@ -340,6 +367,8 @@ class KinematicModel:
         jacobian_local = pin.getFrameJacobian(model, data, self.tip_id, pin.LOCAL)
         if self._single_column:  # eigenpy's one-column matrix is a vector
             jacobian_local = jacobian_local.reshape(6, 1)
+        if self._folded:
+            jacobian_local = fold(jacobian_local, self._folded)
         world_T_tip = pin.updateFramePlacement(model, data, self.tip_id)
         if self.sensor_id == self.tip_id:
             return jacobian_local, world_T_tip, world_T_tip

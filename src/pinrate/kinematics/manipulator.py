@@ -16,6 +16,7 @@ import pinocchio as pin
 from ..errors import PinrateError
 from .home import find_home
 from .kinematic_model import KinematicModel, not_a_robot
+from .mimic import Mimic
 from .partition import Partition
 
 
@@ -54,6 +55,11 @@ class Robot(KinematicModel):
             groups and prismatic joints at the end of the chain) that the default tip and the
             automatic partition leave out (:mod:`.frames`).
         arm_mimics: the mimic joints that follow an arm joint (parallelogram links), left out too.
+        mimics: every mimic joint's relation to its leader, q_follower = m q_leader + o
+            (:mod:`.mimic`; ``mimic`` maps a follower to its leader's name or its
+            :class:`~.mimic.Mimic`): J folds the followers between the base and the tip into
+            their leaders' columns, every step drives the followers, and :meth:`home` puts
+            them on the relation (then inside their own limits).
 
     With ``search_home`` (the default), :meth:`home` is inside every joint's limits and
     non-singular whenever such a configuration exists (:func:`.home.find_home`): the first of
@@ -75,7 +81,7 @@ class Robot(KinematicModel):
         urdf_text: str | None = None,
         package_dirs: Sequence[str] = (),
         reference_configurations: Mapping[str, np.ndarray] | None = None,
-        mimic: Mapping[str, str] | None = None,
+        mimic: Mapping[str, str | Mimic] | None = None,
         srdf_path: Path | None = None,
         search_home: bool = True,
         home_candidates: Sequence[tuple[str, np.ndarray]] | None = None,

@@ -160,8 +160,9 @@ class Partition:
         """Row and column indices of this partition in ``robot``'s Jacobian (cached per robot).
 
         Raises:
-            InputError: a joint the robot does not have, or one off the chain from the base to
-                the tip (it cannot move the tip: its column of J is zero).
+            InputError: a joint the robot does not have, one off the chain from the base to
+                the tip (it cannot move the tip: its column of J is zero), or a mimic joint
+                (its leader moves it: its column is folded into the leader's).
         """
         cache = _INDEX_CACHE.setdefault(check_model(robot), {})
         index = cache.get(self)
@@ -169,6 +170,12 @@ class Partition:
             chain = robot.tip_chain()
             for joint in self.joints:
                 robot.joint_id(joint)  # an unknown name: InputError with the closest names
+                relation = robot.mimics.relations.get(joint)
+                if relation is not None:
+                    raise InputError(
+                        f"joint {joint!r} of robot {robot.name!r} mimics {relation.leader!r} (it moves at "
+                        f"{relation.multiplier:g} times its rate): put {relation.leader!r} in the partition instead"
+                    )
                 if joint not in chain:
                     raise InputError(
                         f"joint {joint!r} is not on the chain from the base to the tip {robot.tip!r} of robot "

@@ -27,6 +27,7 @@ from ..checks import check_count
 from ..errors import LoadError
 from .home import srdf_states
 from .manipulator import Robot, RobotSpec
+from .mimic import Mimic
 from .urdf_meshes import confine_meshes, mesh_roots
 from .urdf_structure import check_structure, max_joints_default
 
@@ -264,14 +265,18 @@ def robot_from_urdf(
     return robot
 
 
-def _mimic_joints(root: ET.Element) -> dict[str, str]:
-    """Joint -> the joint it mimics, from the URDF's ``<mimic joint=...>`` elements (Pinocchio
-    models them as independent joints; :func:`.frames.hand_joints` tells a hand's from an arm's)."""
+def _mimic_joints(root: ET.Element) -> dict[str, Mimic]:
+    """Joint -> its :class:`~.mimic.Mimic` relation, from the URDF's ``<mimic joint=...
+    multiplier=... offset=...>`` elements (multiplier 1 and offset 0 where not given; Pinocchio
+    has refused a value that is not a finite number before this runs). Pinocchio models them
+    as independent joints; :mod:`.mimic` keeps the relation, :func:`.frames.hand_joints` tells
+    a hand's from an arm's."""
     pairs = {}
     for joint in root.findall("joint"):
         mimic = joint.find("mimic")
         if mimic is not None and joint.get("name") and mimic.get("joint"):
-            pairs[joint.get("name", "")] = mimic.get("joint", "")
+            multiplier, offset = float(mimic.get("multiplier", "1")), float(mimic.get("offset", "0"))
+            pairs[joint.get("name", "")] = Mimic(mimic.get("joint", ""), multiplier, offset)
     return pairs
 
 

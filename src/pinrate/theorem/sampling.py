@@ -62,7 +62,7 @@ def _partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Pa
     index = partition.resolve(robot)
     if configurations.shape[0] == 0:
         return np.zeros((0, index.rows.size, index.columns.size))
-    if robot.sensor_id == robot.tip_id:
+    if robot.sensor_id == robot.tip_id and not robot.folds_mimics:
         # The hot loop: Robot.jacobian_unchecked's sensor-at-tip branch, inlined (one Pinocchio
         # call per q, collected in a list, stacked once): 15 % faster than calling the method.
         compute, model, data, tip, local = pin.computeFrameJacobian, robot.model, robot.data, robot.tip_id, pin.LOCAL
