@@ -36,18 +36,18 @@ from __future__ import annotations
 import numpy as np
 
 from ..checks import check_positive, check_vector
-from ..compiled import CoreServo
+from ..compiled import CoreServo, chosen, core_module
 from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
 from ..kinematics.spatial import pose_error, saturate_twist
-from ..solvers import closed_form
 from ..solvers.conditioning import row_scale
 from ..solvers.registry import check_algorithm
 from . import compiled_twin
 from .collision import monitor_for
 from .commands import JointJog, PoseGoal, Uncoupled
 from .context import StepContext
+from .core_step import CoreStep
 from .elbow import Elbow
 from .finish import Finish
 from .joint_space import JointSpace
@@ -63,6 +63,9 @@ from .singularity.auxiliary_elbow import AuxiliaryElbow
 from .singularity.decelerate import decelerate, watched
 from .solve import TwistSolver
 from .status import Status
+
+
+_UNSET = object()
 
 
 class Controller:
@@ -220,6 +223,8 @@ class Controller:
             robot, self.dt, self._positions, self.rate_limits, self._accelerations, self.collision, self.auxiliary
         )
         self._joint_space = JointSpace(self.context, facts, self._positions, self._finish)
+        self._core_for: object = _UNSET  # the pinrate.compiled.use choice _core was found for
+        self._core: CoreStep | None = None
         self._built = True
 
     def __setattr__(self, name: str, value: object) -> None:
@@ -251,6 +256,19 @@ class Controller:
         if type(self).step is not Controller.step:
             return f"{type(self).__name__} steps its own way: its loops run on the Python path"
         return compiled_twin.reason(self, option_names(type(self)))
+
+    def _core_step(self) -> CoreStep | None:
+        """The compiled per-call step where the core covers this controller, else None. Found
+        at the first step and again whenever :func:`pinrate.compiled.use` has changed the path
+        since; ``PINRATE_BACKEND`` is read then (not per step: reading it costs more than the
+        step's checks)."""
+        choice = chosen()
+        if self._core_for is _UNSET or choice != self._core_for:
+            module = core_module()
+            twin = None if module is None else self.compiled()
+            self._core = None if twin is None else CoreStep(twin, self.joint_limits)
+            self._core_for = choice
+        return self._core
 
     def check_inside_limits(self, q: np.ndarray) -> None:
         """InputError naming every joint ``q`` (nq,) puts outside its position limits, when the
@@ -286,8 +304,7 @@ class Controller:
         index = self.index
         jacobian, world_T_tip, world_T_sensor = self.robot.kinematics(q)
         error = None if goal is None else pose_error(world_T_tip, world_T_sensor, goal.target)[index.rows]
-        parts = closed_form.blocks(jacobian, index.selectors) if index.small else None
-        return Observation(q, jacobian, world_T_tip, world_T_sensor, parts, self.algorithm, index, goal, error)
+        return Observation(q, jacobian, world_T_tip, world_T_sensor, self.algorithm, index, goal, error)
 
     def conditioning(self, q: object) -> Conditioning:
         """The least inverse condition number σ_r/σ_1 of the blocks the algorithm inverts at q,
@@ -304,15 +321,19 @@ class Controller:
     def command_twist(self, observation: Observation, command: np.ndarray | PoseGoal) -> tuple[np.ndarray, bool]:
         """(twist, saturated): the command as a twist in partition order, sensor axes,
         saturated by one factor (:func:`~pinrate.kinematics.spatial.saturate_twist`)."""
-        m = self.index.m
+        wanted = self._wanted_twist(observation, command)
+        return saturate_twist(wanted, self.index.m, self.max_linear_speed, self.max_angular_speed)
+
+    def _wanted_twist(self, observation: Observation, command: np.ndarray | PoseGoal) -> np.ndarray:
+        """The command as a twist (m + k,) in partition order, sensor axes (m/s, rad/s), before
+        saturation: a new float array, the caller's to change. A :class:`PoseGoal` commands
+        gain times the pose error (the observation's, where it was taken against that goal)."""
         if isinstance(command, PoseGoal):
             error = observation.error if observation.goal is command else None
             if error is None:
                 error = pose_error(observation.world_T_tip, observation.world_T_sensor, command.target)[self.index.rows]
-            wanted = command.gain * error
-        else:
-            wanted = command
-        return saturate_twist(np.array(wanted, dtype=float), m, self.max_linear_speed, self.max_angular_speed)
+            return np.array(command.gain * error, dtype=float)
+        return np.array(command, dtype=float)
 
     def step(self, q: object, command: object, *, observation: Observation | None = None) -> Step:
         """One control step from q: command -> twist -> joint rates -> next q.
@@ -339,6 +360,11 @@ class Controller:
             return self._joint_space.step(observation, command)
         if not isinstance(command, PoseGoal):
             command = check_vector(command, self.index.rows.size, "twist (linear then angular components)")
+        core = self._core_step()
+        if core is not None:  # the compiled core takes the step unless it needs more (Python's)
+            taken = core(observation, self._wanted_twist(observation, command))
+            if taken is not None:
+                return taken
         twist, saturated = self.command_twist(observation, command)
         statuses = [Status.TWIST_SATURATED] if saturated else []
         details: list[str] = []
