@@ -69,7 +69,9 @@ def rates_tolerance(controller: Controller, q: np.ndarray, rates: np.ndarray) ->
     return 64 * controller.robot.nv * EPS * kappa * float(np.abs(rates).max(initial=1.0))
 
 
-def assert_same_step(controller: Controller, q: np.ndarray, python: pinrate.Step, compiled: pinrate.Step, exact: bool) -> None:
+def assert_same_step(
+    controller: Controller, q: np.ndarray, python: pinrate.Step, compiled: pinrate.Step, exact: bool
+) -> None:
     assert compiled.status is python.status
     assert compiled.conditions == python.conditions
     assert compiled.detail == python.detail

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 import pinrate
-from compiled_core import CLOSED_FORM, ROBOTS, bitwise, load, needs_core, path
+from compiled_core import ROBOTS, bitwise, load, needs_core, path
 from pinrate.control.controller import Controller
 from pinrate.control.servo_run import DIVERGENCE_FACTOR, STALL_IMPROVEMENT, ServoLog
 from pinrate.control.singularity import STRATEGIES
@@ -36,6 +36,8 @@ pytestmark = needs_core
 
 REFERENCE = np.load(DATA / "servo_reference.npz")
 REFERENCE_RUNS = sorted({key.split("/")[0] for key in REFERENCE.files})
+
+
 @pytest.fixture
 def python_steps(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[int]]:
     """Counts Controller.step calls: on the compiled path, the steps handed back."""

@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..checks import check_positive, check_vector
-from ..compiled import CoreServo, chosen, core_module
+from ..compiled import CoreServo
 from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
@@ -47,7 +47,7 @@ from . import compiled_twin
 from .collision import monitor_for
 from .commands import JointJog, PoseGoal, Uncoupled
 from .context import StepContext
-from .core_step import CoreStep
+from .core_step import CorePath
 from .elbow import Elbow
 from .finish import Finish
 from .joint_space import JointSpace
@@ -63,9 +63,6 @@ from .singularity.auxiliary_elbow import AuxiliaryElbow
 from .singularity.decelerate import decelerate, watched
 from .solve import TwistSolver
 from .status import Status
-
-
-_UNSET = object()
 
 
 class Controller:
@@ -223,8 +220,7 @@ class Controller:
             robot, self.dt, self._positions, self.rate_limits, self._accelerations, self.collision, self.auxiliary
         )
         self._joint_space = JointSpace(self.context, facts, self._positions, self._finish)
-        self._core_for: object = _UNSET  # the pinrate.compiled.use choice _core was found for
-        self._core: CoreStep | None = None
+        self._core_step = CorePath(self.compiled, facts.limits)
         self._built = True
 
     def __setattr__(self, name: str, value: object) -> None:
@@ -243,9 +239,8 @@ class Controller:
         return None if self.auxiliary is None else self.auxiliary.elbow
 
     def compiled(self) -> CoreServo | None:
-        """The compiled twin of this controller (:mod:`pinrate.compiled`) with its settings as
-        they are now; None where the Python path is chosen or the configuration is one the
-        core does not cover (:meth:`compiled_reason` says which)."""
+        """The compiled twin of this controller (:mod:`pinrate.compiled`); None where the Python
+        path is chosen or the core does not cover it (:meth:`compiled_reason` says which)."""
         return None if self.compiled_reason() is not None else compiled_twin.twin(self)
 
     def compiled_reason(self) -> str | None:
@@ -256,19 +251,6 @@ class Controller:
         if type(self).step is not Controller.step:
             return f"{type(self).__name__} steps its own way: its loops run on the Python path"
         return compiled_twin.reason(self, option_names(type(self)))
-
-    def _core_step(self) -> CoreStep | None:
-        """The compiled per-call step where the core covers this controller, else None. Found
-        at the first step and again whenever :func:`pinrate.compiled.use` has changed the path
-        since; ``PINRATE_BACKEND`` is read then (not per step: reading it costs more than the
-        step's checks)."""
-        choice = chosen()
-        if self._core_for is _UNSET or choice != self._core_for:
-            module = core_module()
-            twin = None if module is None else self.compiled()
-            self._core = None if twin is None else CoreStep(twin, self.joint_limits)
-            self._core_for = choice
-        return self._core
 
     def check_inside_limits(self, q: np.ndarray) -> None:
         """InputError naming every joint ``q`` (nq,) puts outside its position limits, when the
@@ -325,9 +307,7 @@ class Controller:
         return saturate_twist(wanted, self.index.m, self.max_linear_speed, self.max_angular_speed)
 
     def _wanted_twist(self, observation: Observation, command: np.ndarray | PoseGoal) -> np.ndarray:
-        """The command as a twist (m + k,) in partition order, sensor axes (m/s, rad/s), before
-        saturation: a new float array, the caller's to change. A :class:`PoseGoal` commands
-        gain times the pose error (the observation's, where it was taken against that goal)."""
+        """The command as a new twist array (m + k,; partition order, sensor axes), unsaturated."""
         if isinstance(command, PoseGoal):
             error = observation.error if observation.goal is command else None
             if error is None:
@@ -352,6 +332,7 @@ class Controller:
         (``Status.JOINT_LIMIT``, ``frozen``); rates over a velocity limit are all scaled alike
         (``Status.RATE_LIMITED``). Never raises for what the robot does, and never returns
         NaN or inf.
+        Where the core covers the controller, twist and pose steps run in it (:mod:`.core_step`).
         """
         if observation is None:
             observation = self.observe(q)
@@ -361,10 +342,9 @@ class Controller:
         if not isinstance(command, PoseGoal):
             command = check_vector(command, self.index.rows.size, "twist (linear then angular components)")
         core = self._core_step()
-        if core is not None:  # the compiled core takes the step unless it needs more (Python's)
-            taken = core(observation, self._wanted_twist(observation, command))
-            if taken is not None:
-                return taken
+        taken = None if core is None else core(observation, self._wanted_twist(observation, command))
+        if taken is not None:  # else Python's: no core, or a step that needs more than its path
+            return taken
         twist, saturated = self.command_twist(observation, command)
         statuses = [Status.TWIST_SATURATED] if saturated else []
         details: list[str] = []

@@ -20,7 +20,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..compiled import CoreServo
+from ..compiled import CoreServo, chosen, core_module
 from ..compiled.boundary import CLAMPED, RATE_LIMITED, SATURATED, STEP_FLAGS
 from .limits.position import reached_detail
 from .limits.velocity import scaled_detail
@@ -39,9 +39,7 @@ def _conditions(flags: int) -> tuple[Status, ...]:
     return ranked(statuses)
 
 
-CONDITIONS: tuple[tuple[Status, ...], ...] = tuple(
-    _conditions(flags) for flags in range(2 * max(STEP_FLAGS.values()))
-)
+CONDITIONS: tuple[tuple[Status, ...], ...] = tuple(_conditions(flags) for flags in range(2 * max(STEP_FLAGS.values())))
 """Every condition a step the core took met, least severe first, indexed by its flags."""
 
 STATUSES: tuple[Status, ...] = tuple(conditions[-1] if conditions else Status.OK for conditions in CONDITIONS)
@@ -93,4 +91,28 @@ class CoreStep:
         return Step(next_q, rates, STATUSES[flags], (), twist, observation, detail, CONDITIONS[flags])
 
 
-__all__ = ["CONDITIONS", "STATUSES", "CoreStep", "core_detail"]
+class CorePath:
+    """A controller's :class:`CoreStep`, or None where the Python path runs it: found once per
+    :func:`pinrate.compiled.use` choice (``PINRATE_BACKEND`` is read then, not per step:
+    reading the environment costs more than the step's own checks).
+
+    Args:
+        twin: the controller's :meth:`~.controller.Controller.compiled`.
+        limits: the position limits the controller keeps.
+    """
+
+    def __init__(self, twin: Callable[[], CoreServo | None], limits: tuple[Limit, ...]) -> None:
+        self._twin = twin
+        self._limits = limits
+        self._steps: dict[str | None, CoreStep | None] = {}
+
+    def __call__(self) -> CoreStep | None:
+        choice = chosen()
+        steps = self._steps
+        if choice not in steps:
+            twin = None if core_module() is None else self._twin()
+            steps[choice] = None if twin is None else CoreStep(twin, self._limits)
+        return steps[choice]
+
+
+__all__ = ["CONDITIONS", "STATUSES", "CorePath", "CoreStep", "core_detail"]

@@ -40,7 +40,8 @@ class Observation:
     index: PartitionIndex
     goal: PoseGoal | None = None
     error: np.ndarray | None = None
-    _blocks: closed_form.Blocks | None | bool = False  # False: not made yet
+    _blocks: closed_form.Blocks | None = None
+    _blocks_made: bool = False
     _spectral_radius: float | None = None
     _inverses: dict[str, closed_form.Matrix | SingularBlockError] | None = None
 
@@ -48,10 +49,10 @@ class Observation:
     def blocks(self) -> closed_form.Blocks | None:
         """A, B, U, W of J (eq. 19) as nested lists when the closed-form kernels apply, else
         None; made on first use (a step the compiled core takes reads J alone)."""
-        blocks = self._blocks
-        if blocks is False:
-            blocks = self._blocks = closed_form.blocks(self.jacobian, self.index.selectors) if self.index.small else None
-        return blocks  # type: ignore[return-value]  # False was replaced above
+        if not self._blocks_made:
+            self._blocks = closed_form.blocks(self.jacobian, self.index.selectors) if self.index.small else None
+            self._blocks_made = True
+        return self._blocks
 
     @property
     def spectral_radius(self) -> float:
