@@ -77,6 +77,24 @@ def measure(robot_name: str, *, batch: int, rounds: int) -> tuple[list[timing.Ro
         functions[f"pinrate {algorithm} step"] = (step, batch)
     controller = pinrate.Controller(robot, partition=partition)  # default safety: limits, decelerate
     functions["controller step, default safety (exact)"] = (batched(lambda: controller.step(q, twist)), batch)
+    # The same step on each path (the default row above takes the compiled one where installed);
+    # the teleop form passes the observation it made for its command.
+    mca1 = pinrate.Controller(robot, partition=partition, algorithm="mca1")
+    observation = controller.observe(q)
+    paths = ("python", "compiled") if compiled else ("python",)
+    for choice in paths:
+        functions[f"controller step (exact), {choice}"] = (
+            timing.on(choice, batched(lambda: controller.step(q, twist))),
+            batch,
+        )
+        functions[f"controller step (mca1), {choice}"] = (
+            timing.on(choice, batched(lambda: mca1.step(q, twist))),
+            batch,
+        )
+        functions[f"controller step (exact) + observation, {choice}"] = (
+            timing.on(choice, batched(lambda: controller.step(q, twist, observation=observation))),
+            batch,
+        )
     guarded = pinrate.Controller(robot, partition=partition, collision=True)
     functions["controller step, self-collision (exact)"] = (batched(lambda: guarded.step(q, twist)), batch)
     functions[BARE] = (batched(bare_servo_step), batch)
@@ -142,6 +160,19 @@ def main() -> None:
     print(
         timing.verdict(
             "python mca1 step / exact step", by_name["pinrate mca1 step"] / by_name["pinrate exact step"], 0.8
+        )
+    )
+    if "controller step (exact), compiled" in by_name:
+        print(
+            timing.verdict(
+                "compiled controller step (exact) / floor", by_name["controller step (exact), compiled"] / floor, 5.0
+            )
+        )
+    print(
+        timing.verdict(
+            "python controller step (exact) / bare Pinocchio+numpy step",
+            by_name["controller step (exact), python"] / by_name[BARE],
+            2.0,
         )
     )
     default = by_name["controller step, default safety (exact)"]

@@ -2,7 +2,8 @@
 //
 // Kinematics(...)                    a private Pinocchio model rebuilt from the Python model
 // Settings()                         the controller's settings, set field by field, by name
-// Servo(kinematics, settings)        a controller's twin; run(...) runs the servo loop
+// Servo(kinematics, settings)        a controller's twin; run(...) runs the servo loop, step(...)
+//                                    takes one Controller.step from the caller's J
 // spectral_radius_at(kin, ..., qs)   rho at each configuration (sample_convergence)
 // solve_timing(...)                  one algorithm's solve alone, repeated (benchmarks)
 //
@@ -18,6 +19,7 @@
 #include <nanobind/stl/vector.h>
 
 #include <chrono>
+#include <cstdint>
 #include <set>
 #include <string>
 #include <tuple>
@@ -231,6 +233,25 @@ nb::tuple run_servo(Servo &servo, Array<const double> q0, Array<const double> ta
   return nb::make_tuple(outcome, state.step_number, state.best, state.progress, state.progress_step);
 }
 
+// One Controller.step at q from the caller's J (6, nv; sensor axes, any strides) and the
+// commanded twist (m + k,; saturated in place): rates (nv,) and next (nq,) written, nothing
+// allocated. (taken, flags, scale, hit): taken False where Python must take the step.
+nb::tuple step_once(Servo &servo, Array<const double> q, nb::ndarray<const double, nb::ndim<2>, nb::device::cpu> jacobian,
+                    Array<double> twist, Array<double> rates, Array<double> next) {
+  Kinematics &kinematics = servo.kinematics();
+  const std::size_t nq = static_cast<std::size_t>(kinematics.nq()), nv = static_cast<std::size_t>(kinematics.nv());
+  if (q.size() != nq || next.size() != nq || rates.size() != nv ||
+      twist.size() != servo.settings().rows.size() || jacobian.shape(0) != 6 || jacobian.shape(1) != nv)
+    throw std::invalid_argument("q, jacobian, twist, rates or next has the wrong size");
+  const double *source = jacobian.data();
+  const std::int64_t row_stride = jacobian.stride(0), column_stride = jacobian.stride(1);
+  for (std::size_t c = 0; c < nv; ++c)
+    for (int r = 0; r < 6; ++r) kinematics.jacobian(r, c) = source[r * row_stride + c * column_stride];
+  Taken taken;
+  const bool stepped = servo.step(q.data(), twist.data(), rates.data(), next.data(), taken);
+  return nb::make_tuple(stepped, taken.flags, taken.scale, taken.hit);
+}
+
 // rho at each configuration (N, nq); the servo's settings give the partition. The map runs
 // on a twin of the robot's kinematics (its own Data): threads sharing a Robot (a Dask worker's)
 // may map at once.
@@ -293,7 +314,7 @@ NB_MODULE(pinrate_core, module) {
   // pinrate keeps a Kinematics per Robot until exit; that is no leak worth a warning.
   nb::set_leak_warnings(false);
   module.attr("PINOCCHIO_VERSION") = PINOCCHIO_VERSION;
-  module.attr("ABI") = 3;  // bumped when pinrate.compiled must change with it
+  module.attr("ABI") = 4;  // bumped when pinrate.compiled must change with it
 
   // boundary.hpp's constants, which pinrate.compiled.boundary checks at load.
   module.attr("SINGULAR_RATIO") = kSingularRatio;
@@ -353,6 +374,7 @@ NB_MODULE(pinrate_core, module) {
       .def("run", &run_servo, nb::kw_only(), "q0"_a, "target"_a, "gain"_a, "tol"_a, "stall_steps"_a, "max_steps"_a,
            "divergence_factor"_a, "stall_improvement"_a, "step_number"_a, "best"_a, "progress"_a, "progress_step"_a,
            "q"_a, "rates"_a, "position"_a, "orientation"_a, "radius"_a, "flags"_a, "scale"_a, "hit"_a)
+      .def("step", &step_once, nb::kw_only(), "q"_a, "jacobian"_a, "twist"_a, "rates"_a, "next"_a)
       .def("spectral_radius_at", &spectral_radius_at)
       .def("solve_timing", &solve_timing);
 }

@@ -7,10 +7,15 @@
 // a least-squares exact step) is handed back: the Python controller takes that one step and
 // the loop goes on. So each rule is written once in full (in Python) and the common path
 // twice (here, and there), and the test of the two paths holds them together.
+//
+// That common path is one member, advance(), which the loop runs each step and step() runs
+// for a single Controller.step called from Python (pinrate.control.core_step), with the same
+// hand-back.
 #pragma once
 
 #include <Eigen/LU>
 #include <cmath>
+#include <algorithm>
 #include <functional>
 #include <vector>
 
@@ -60,6 +65,14 @@ struct Blocks {
   Block A, B, U, W;
 };
 
+// What a step the core took met (boundary.hpp's StepFlag), its velocity scale (1 for none)
+// and the first limit it clamped (-1 for none).
+struct Taken {
+  int flags = 0;
+  double scale = 1.0;
+  int hit = -1;
+};
+
 // The servo's stop-rule state, carried across hand-backs.
 struct ServoState {
   long step_number = 0;
@@ -85,6 +98,7 @@ class Servo {
   Servo(Kinematics &kinematics, Settings settings) : kin_(kinematics), s_(std::move(settings)) {
     n_ = static_cast<int>(s_.columns.size());
     k_ = static_cast<int>(s_.rows.size()) - s_.m;
+    displacement_ = Vector::Zero(kin_.nv());
   }
 
   // Blocks A, B, U, W of the sensor-frame J (closed_form.blocks).
@@ -119,7 +133,7 @@ class Servo {
           const std::function<bool()> &interrupted) {
     const int nq = kin_.nq(), nv = kin_.nv();
     // The step's vectors live across steps: the loop allocates nothing per step.
-    Vector q = q0, next(nq), rates(nv), displacement(nv);
+    Vector q = q0, next(nq), rates(nv);
     const long first = state.step_number;
     for (;; ++state.step_number) {
       const long step = state.step_number;
@@ -151,37 +165,66 @@ class Servo {
       if (step == log.capacity) return FULL;  // no row for the next q
       double twist[6];
       for (int r = 0; r < s_.m + k_; ++r) twist[r] = gain * error[r];
-      int flags = 0;
-      if (saturate(twist)) flags |= SATURATED;
-      const double bound = conditioning_bound(parts, R);
-      // Under the cheap bound, the SVDs decide (Controller._plan): in the singular region a
-      // plan, which Python makes; above it after all, the algorithm as it is.
-      if (bound < s_.slow_threshold) {
-        if (!need_reduced) R = reduced();
-        if (conditioning(R) < s_.slow_threshold) return HANDBACK;
-      }
-      rates.setZero();
-      if (!(s_.small ? solve(parts, twist, rates) : solve_general(R, twist, rates))) return HANDBACK;
-      if (s_.position_limits && passing(q, rates)) return HANDBACK;
-      if (s_.watch && !(bound >= s_.watch_factor * s_.slow_threshold || max_abs(rates) * s_.dt <= s_.watched_step))
-        return HANDBACK;  // decelerate judges this step one step ahead
-      const double scale = rate_scale(rates);
-      if (scale < 1.0) {
-        rates *= scale;
-        flags |= RATE_LIMITED_FLAG;
-      }
-      displacement = rates * s_.dt;
-      pinocchio::integrate(kin_.model, q, displacement, next);
-      int hit = -1;
-      if (s_.position_limits) hit = clamp(next, q, rates);
-      if (hit >= 0) flags |= CLAMPED;
-      log.flags[step] = flags;
-      log.scale[step] = scale;
-      log.hit[step] = hit;
+      Taken taken;
+      if (!advance(q, twist, parts, R, rates, next, taken)) return HANDBACK;
+      log.flags[step] = taken.flags;
+      log.scale[step] = taken.scale;
+      log.hit[step] = taken.hit;
       std::copy(rates.data(), rates.data() + nv, log.rates + step * nv);
       std::copy(next.data(), next.data() + nq, log.q + (step + 1) * nq);
       q.swap(next);
     }
+  }
+
+  // One step's common path (Controller.step's), from the J of kin_ at q and the commanded
+  // twist (partition order, sensor axes; saturated in place): saturation, the conditioning
+  // bound, the algorithm, the position-limit test, the decelerate look-ahead, the velocity
+  // scale, integration and the clamp. parts and R are J's blocks and reduced J where the
+  // caller has them (R may be empty: made here when needed). false: the step is Python's.
+  bool advance(const Vector &q, double *twist, const Blocks &parts, Matrix &R, Vector &rates, Vector &next,
+               Taken &taken) {
+    const bool need_reduced = !s_.small || s_.measure_j;
+    int flags = 0;
+    if (saturate(twist)) flags |= SATURATED;
+    const double bound = conditioning_bound(parts, R);
+    // Under the cheap bound, the SVDs decide (Controller._plan): in the singular region a
+    // plan, which Python makes; above it after all, the algorithm as it is.
+    if (bound < s_.slow_threshold) {
+      if (!need_reduced) R = reduced();
+      if (conditioning(R) < s_.slow_threshold) return false;
+    }
+    rates.setZero();
+    if (!(s_.small ? solve(parts, twist, rates) : solve_general(R, twist, rates))) return false;
+    if (s_.position_limits && passing(q, rates)) return false;
+    if (s_.watch && !(bound >= s_.watch_factor * s_.slow_threshold || max_abs(rates) * s_.dt <= s_.watched_step))
+      return false;  // decelerate judges this step one step ahead
+    const double scale = rate_scale(rates);
+    if (scale < 1.0) {
+      rates *= scale;
+      flags |= RATE_LIMITED_FLAG;
+    }
+    displacement_ = rates * s_.dt;
+    pinocchio::integrate(kin_.model, q, displacement_, next);
+    int hit = -1;
+    if (s_.position_limits) hit = clamp(next, q, rates);
+    if (hit >= 0) flags |= CLAMPED;
+    taken = {flags, scale, hit};
+    return true;
+  }
+
+  // Controller.step per call, at q (nq,) with kin_.jacobian already J at q (the caller's
+  // kinematics pass): the blocks from it, then advance; rates (nv,) and next (nq,) written.
+  // false: the step is Python's (rates and next then undefined).
+  bool step(const double *q, double *twist, double *rates, double *next, Taken &taken) {
+    const int nq = kin_.nq(), nv = kin_.nv();
+    if (q_.size() != nq) q_.resize(nq), next_.resize(nq), rates_.resize(nv);
+    std::copy(q, q + nq, q_.data());
+    const Blocks parts = s_.small ? blocks() : Blocks{};
+    Matrix R = !s_.small || s_.measure_j ? reduced() : Matrix();
+    if (!advance(q_, twist, parts, R, rates_, next_, taken)) return false;
+    std::copy(rates_.data(), rates_.data() + nv, rates);
+    std::copy(next_.data(), next_.data() + nq, next);
+    return true;
   }
 
   int n() const { return n_; }
@@ -195,6 +238,8 @@ class Servo {
   Kinematics &kin_;
   Settings s_;
   int n_ = 0, k_ = 0;
+  Vector displacement_;       // rates * dt, kept across steps: a step allocates no vector of nv
+  Vector q_, rates_, next_;  // step()'s working copies, sized on its first call
 
   // spatial.saturate_twist: the whole twist scaled by one factor, the largest that meets both
   // speed limits, so the commanded screw keeps its direction (the same operations as Python).

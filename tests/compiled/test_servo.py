@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 import pinrate
-from compiled_core import needs_core, path
+from compiled_core import ROBOTS, bitwise, load, needs_core, path
 from pinrate.control.controller import Controller
 from pinrate.control.servo_run import DIVERGENCE_FACTOR, STALL_IMPROVEMENT, ServoLog
 from pinrate.control.singularity import STRATEGIES
@@ -36,16 +36,6 @@ pytestmark = needs_core
 
 REFERENCE = np.load(DATA / "servo_reference.npz")
 REFERENCE_RUNS = sorted({key.split("/")[0] for key in REFERENCE.files})
-CLOSED_FORM = ("schur", "mca1", "mca2", "mca3")
-ROBOTS = ("ur5", "panda", "scara", "barker_arm", "kinova", "planar_polar")
-"""Six axes and a spherical wrist; seven (a 3x4 A: pseudo-inverses); four, planar (SCARA); the
-paper's arm with its sensor off the tip; continuous joints; three joints, no wrist; and a
-4-DOF arm from another package (a 3x1 W) left the list when its automatic partition (six
-rows, rank 4) went to Python: its steps judge what the joints cannot make (below)."""
-
-
-def load(name: str) -> pinrate.Robot:
-    return pinrate.load(DATA / "third_party" / "rtb_al5d_robot.urdf" if name == "al5d" else name)
 
 
 @pytest.fixture
@@ -102,13 +92,6 @@ def assert_same(
             assert not beyond.size, f"joint_rates differ beyond rounding at steps {beyond}"
         else:
             np.testing.assert_allclose(ours, theirs, rtol=1e-12, atol=1e-12, err_msg=field)
-
-
-def bitwise(robot: pinrate.Robot, algorithm: str, partition: pinrate.Partition | None = None) -> bool:
-    """Whether both paths make the same operations: the sensor at the tip, a closed-form kernel
-    on square blocks of size <= 3."""
-    small = (partition or pinrate.Partition.auto(robot)).resolve(robot).small
-    return robot.sensor_id == robot.tip_id and algorithm in CLOSED_FORM and small
 
 
 @pytest.mark.parametrize("name", REFERENCE_RUNS)

@@ -8,7 +8,7 @@ keeps everything on the pure-Python path.
 
 from __future__ import annotations
 
-from .core import Backend, backend, core_module, use
+from .core import Backend, backend, chosen, core_module, use
 from .kinematics import core_kinematics
 from .servo import CoreServo, ServoSettings, core_servo, rho_map
 
@@ -17,6 +17,7 @@ __all__ = [
     "CoreServo",
     "ServoSettings",
     "backend",
+    "chosen",
     "core_kinematics",
     "core_module",
     "core_servo",

@@ -25,7 +25,7 @@ CHOICES = ("auto", "python", "compiled")
 CORE_MODULE = "pinrate_core"
 """The extension module's name."""
 
-CORE_ABI = 3
+CORE_ABI = 4
 """The ``pinrate_core.ABI`` this pinrate speaks; a core of another ABI is not used, nor one
 whose constants or settings' fields differ from this pinrate's (:mod:`.boundary`)."""
 
@@ -115,6 +115,13 @@ def backend() -> Backend:
             raise InputError(f"{ENVIRONMENT}=compiled, but {reason}")
         return Backend("python", reason, choice)
     return Backend("compiled", reason, choice)
+
+
+def chosen() -> str | None:
+    """What :func:`use` chose for this process (None: ``PINRATE_BACKEND`` decides): a per-call
+    step's cheap test of whether the path may have changed (reading the environment costs
+    more than the step's own checks)."""
+    return _choice
 
 
 def use(choice: str | None) -> None:

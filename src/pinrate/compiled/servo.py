@@ -42,7 +42,7 @@ def core_settings(core: ModuleType, settings: ServoSettings) -> Any:
 
 class CoreServo:
     """A controller's compiled twin: ``run`` is the servo loop, ``spectral_radius_at`` the
-    ρ map, both in C++ (the GIL released)."""
+    ρ map, both in C++ (the GIL released); ``step_function`` one control step per call."""
 
     def __init__(self, robot: Robot, settings: ServoSettings) -> None:
         kinematics = core_kinematics(robot)
@@ -56,6 +56,14 @@ class CoreServo:
         self.core = core
         self.settings = settings  # no reference to the robot: the caches keyed by it must let it go
         self._servo = core.Servo(kinematics, core_settings(core, settings))
+        self.nq, self.nv = kinematics.nq, kinematics.nv
+
+    def step_function(self) -> Callable[..., tuple[bool, int, float, int]]:
+        """The core's one control step, called per step with no wrapper between (see
+        ``core/src/module.cpp``'s ``step_once``): ``(q=, jacobian=, twist=, rates=, next=)``
+        -> (taken, flags, scale, hit); the twist saturated in place, rates and next written."""
+        step: Callable[..., tuple[bool, int, float, int]] = self._servo.step
+        return step
 
     def run(self, **arguments: Any) -> tuple[int, int, float, float, int]:
         """The servo loop, every argument by its name (see ``core/src/module.cpp``'s

@@ -41,13 +41,13 @@ from ..errors import InputError, SingularBlockError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, partition_for
 from ..kinematics.spatial import pose_error, saturate_twist
-from ..solvers import closed_form
 from ..solvers.conditioning import row_scale
 from ..solvers.registry import check_algorithm
 from . import compiled_twin
 from .collision import monitor_for
 from .commands import JointJog, PoseGoal, Uncoupled
 from .context import StepContext
+from .core_step import CorePath
 from .elbow import Elbow
 from .finish import Finish
 from .joint_space import JointSpace
@@ -220,6 +220,7 @@ class Controller:
             robot, self.dt, self._positions, self.rate_limits, self._accelerations, self.collision, self.auxiliary
         )
         self._joint_space = JointSpace(self.context, facts, self._positions, self._finish)
+        self._core_step = CorePath(self.compiled, facts.limits)
         self._built = True
 
     def __setattr__(self, name: str, value: object) -> None:
@@ -238,9 +239,8 @@ class Controller:
         return None if self.auxiliary is None else self.auxiliary.elbow
 
     def compiled(self) -> CoreServo | None:
-        """The compiled twin of this controller (:mod:`pinrate.compiled`) with its settings as
-        they are now; None where the Python path is chosen or the configuration is one the
-        core does not cover (:meth:`compiled_reason` says which)."""
+        """The compiled twin of this controller (:mod:`pinrate.compiled`); None where the Python
+        path is chosen or the core does not cover it (:meth:`compiled_reason` says which)."""
         return None if self.compiled_reason() is not None else compiled_twin.twin(self)
 
     def compiled_reason(self) -> str | None:
@@ -286,8 +286,7 @@ class Controller:
         index = self.index
         jacobian, world_T_tip, world_T_sensor = self.robot.kinematics(q)
         error = None if goal is None else pose_error(world_T_tip, world_T_sensor, goal.target)[index.rows]
-        parts = closed_form.blocks(jacobian, index.selectors) if index.small else None
-        return Observation(q, jacobian, world_T_tip, world_T_sensor, parts, self.algorithm, index, goal, error)
+        return Observation(q, jacobian, world_T_tip, world_T_sensor, self.algorithm, index, goal, error)
 
     def conditioning(self, q: object) -> Conditioning:
         """The least inverse condition number σ_r/σ_1 of the blocks the algorithm inverts at q,
@@ -304,15 +303,17 @@ class Controller:
     def command_twist(self, observation: Observation, command: np.ndarray | PoseGoal) -> tuple[np.ndarray, bool]:
         """(twist, saturated): the command as a twist in partition order, sensor axes,
         saturated by one factor (:func:`~pinrate.kinematics.spatial.saturate_twist`)."""
-        m = self.index.m
+        wanted = self._wanted_twist(observation, command)
+        return saturate_twist(wanted, self.index.m, self.max_linear_speed, self.max_angular_speed)
+
+    def _wanted_twist(self, observation: Observation, command: np.ndarray | PoseGoal) -> np.ndarray:
+        """The command as a new twist array (m + k,; partition order, sensor axes), unsaturated."""
         if isinstance(command, PoseGoal):
             error = observation.error if observation.goal is command else None
             if error is None:
                 error = pose_error(observation.world_T_tip, observation.world_T_sensor, command.target)[self.index.rows]
-            wanted = command.gain * error
-        else:
-            wanted = command
-        return saturate_twist(np.array(wanted, dtype=float), m, self.max_linear_speed, self.max_angular_speed)
+            return np.array(command.gain * error, dtype=float)
+        return np.array(command, dtype=float)
 
     def step(self, q: object, command: object, *, observation: Observation | None = None) -> Step:
         """One control step from q: command -> twist -> joint rates -> next q.
@@ -331,6 +332,7 @@ class Controller:
         (``Status.JOINT_LIMIT``, ``frozen``); rates over a velocity limit are all scaled alike
         (``Status.RATE_LIMITED``). Never raises for what the robot does, and never returns
         NaN or inf.
+        Where the core covers the controller, twist and pose steps run in it (:mod:`.core_step`).
         """
         if observation is None:
             observation = self.observe(q)
@@ -339,6 +341,10 @@ class Controller:
             return self._joint_space.step(observation, command)
         if not isinstance(command, PoseGoal):
             command = check_vector(command, self.index.rows.size, "twist (linear then angular components)")
+        core = self._core_step()
+        taken = None if core is None else core(observation, self._wanted_twist(observation, command))
+        if taken is not None:  # else Python's: no core, or a step that needs more than its path
+            return taken
         twist, saturated = self.command_twist(observation, command)
         statuses = [Status.TWIST_SATURATED] if saturated else []
         details: list[str] = []

@@ -26,7 +26,6 @@ class Observation:
         q: the configuration (nq,).
         jacobian: the sensor-frame Jacobian (6, nv).
         world_T_tip, world_T_sensor: the tip and sensor poses in the world.
-        blocks: A, B, U, W as nested lists when the closed-form kernels apply, else None.
         algorithm: the controller's algorithm (ρ is that of its error map where it differs).
         index: the controller's resolved partition.
         goal: the pose goal ``error`` was measured against, if any.
@@ -37,13 +36,23 @@ class Observation:
     jacobian: np.ndarray
     world_T_tip: pin.SE3
     world_T_sensor: pin.SE3
-    blocks: closed_form.Blocks | None
     algorithm: str
     index: PartitionIndex
     goal: PoseGoal | None = None
     error: np.ndarray | None = None
+    _blocks: closed_form.Blocks | None = None
+    _blocks_made: bool = False
     _spectral_radius: float | None = None
     _inverses: dict[str, closed_form.Matrix | SingularBlockError] | None = None
+
+    @property
+    def blocks(self) -> closed_form.Blocks | None:
+        """A, B, U, W of J (eq. 19) as nested lists when the closed-form kernels apply, else
+        None; made on first use (a step the compiled core takes reads J alone)."""
+        if not self._blocks_made:
+            self._blocks = closed_form.blocks(self.jacobian, self.index.selectors) if self.index.small else None
+            self._blocks_made = True
+        return self._blocks
 
     @property
     def spectral_radius(self) -> float:

@@ -11,13 +11,11 @@ from typing import Any
 import numpy as np
 
 from ..compiled import CoreServo
-from ..compiled.boundary import CLAMPED, RATE_LIMITED, SATURATED, STEP_FLAGS
 from .commands import PoseGoal
 from .controller import Controller, Observation, error_norms
-from .limits.position import reached_detail
-from .limits.velocity import scaled_detail
+from .core_step import DETAILED, STATUSES, core_detail
 from .stall import stall_cause
-from .status import Status, most_severe
+from .status import Status
 from .trajectory import Trajectory
 
 DIVERGENCE_FACTOR = 3.0
@@ -212,10 +210,10 @@ class ServoRun:
         """Each step's status word and detail: the Python steps' own, the core's from its flags."""
         taken = self.step_number
         flags = self.log.flags[:taken].tolist()
-        status = [_CORE_WORDS[flag] for flag in flags]
+        status = [STATUSES[flag].word for flag in flags]
         details = [""] * taken
         for step_number, flag in enumerate(flags):
-            if flag & (RATE_LIMITED | CLAMPED):
+            if flag & DETAILED:
                 details[step_number] = self._core_detail(step_number, flag)
         for step_number, (word, detail) in self.steps.items():
             status[step_number], details[step_number] = word, detail
@@ -223,13 +221,13 @@ class ServoRun:
 
     def _core_detail(self, step_number: int, flag: int) -> str:
         """Controller._finish's detail of a step the core took."""
-        parts = []
-        if flag & RATE_LIMITED:
-            parts.append(scaled_detail(float(self.log.scale[step_number])))
-        if flag & CLAMPED:
-            limit = self.controller.position_limit(int(self.log.hit[step_number]))
-            parts.append(reached_detail(limit, float(self.log.q[step_number + 1][limit.q_index])))
-        return "; ".join(parts)
+        log = self.log
+        return core_detail(
+            flag,
+            float(log.scale[step_number]),
+            lambda: self.controller.position_limit(int(log.hit[step_number])),
+            log.q[step_number + 1],
+        )
 
     def trajectory(self) -> Trajectory:
         taken = self.step_number
@@ -251,19 +249,6 @@ class ServoRun:
             partition=controller.partition,
             detail=details,
         )
-
-
-def _core_word(flag: int) -> str:
-    statuses = [Status.TWIST_SATURATED] if flag & SATURATED else []
-    if flag & RATE_LIMITED:
-        statuses.append(Status.RATE_LIMITED)
-    if flag & CLAMPED:
-        statuses.append(Status.JOINT_LIMIT)
-    return most_severe(*statuses).word
-
-
-_CORE_WORDS = [_core_word(flag) for flag in range(2 * max(STEP_FLAGS.values()))]
-"""The status word of a step the core took, by its flags."""
 
 
 __all__ = ["DIVERGENCE_FACTOR", "STALL_IMPROVEMENT", "ServoRun"]
