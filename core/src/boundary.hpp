@@ -17,6 +17,13 @@ namespace pinrate_core {
 constexpr double kSingularRatio = 1e-10;
 constexpr double kSingularRatioSquared = kSingularRatio * kSingularRatio;
 
+// pinrate.checks.PHYSICAL_BOUND: the largest magnitude a checked q or twist entry may have.
+constexpr double kPhysicalBound = 1e6;
+
+// pinrate.kinematics.kinematic_model.UNIT_TOLERANCE: how far a continuous joint's (cos, sin)
+// pair of a checked q may be off unit norm (pinocchio::isNormalized's precision).
+constexpr double kUnitTolerance = 1e-6;
+
 // pinrate.solvers.eigen.FLAT: Viete's branch takes a 3x3 whose shifted p >= -FLAT as a
 // triple root.
 constexpr double kFlat = 1e-200;

@@ -2,8 +2,9 @@
 //
 // Kinematics(...)                    a private Pinocchio model rebuilt from the Python model
 // Settings()                         the controller's settings, set field by field, by name
-// Servo(kinematics, settings)        a controller's twin; run(...) runs the servo loop, step(...)
-//                                    takes one Controller.step from the caller's J
+// Servo(kinematics, settings)        a controller's twin; run(...) runs the servo loop,
+//                                    step_at(...) takes one Controller.step from q, step_given(...)
+//                                    one from the caller's J
 // spectral_radius_at(kin, ..., qs)   rho at each configuration (sample_convergence)
 // solve_timing(...)                  one algorithm's solve alone, repeated (benchmarks)
 //
@@ -17,6 +18,10 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
+
+// numpy's C API, this translation unit only (the per-call step reads and makes its arrays).
+#define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
+#include <numpy/arrayobject.h>
 
 #include <chrono>
 #include <cstdint>
@@ -233,23 +238,139 @@ nb::tuple run_servo(Servo &servo, Array<const double> q0, Array<const double> ta
   return nb::make_tuple(outcome, state.step_number, state.best, state.progress, state.progress_step);
 }
 
-// One Controller.step at q from the caller's J (6, nv; sensor axes, any strides) and the
-// commanded twist (m + k,; saturated in place): rates (nv,) and next (nq,) written, nothing
-// allocated. (taken, flags, scale, hit): taken False where Python must take the step.
-nb::tuple step_once(Servo &servo, Array<const double> q, nb::ndarray<const double, nb::ndim<2>, nb::device::cpu> jacobian,
-                    Array<double> twist, Array<double> rates, Array<double> next) {
-  Kinematics &kinematics = servo.kinematics();
-  const std::size_t nq = static_cast<std::size_t>(kinematics.nq()), nv = static_cast<std::size_t>(kinematics.nv());
-  if (q.size() != nq || next.size() != nq || rates.size() != nv ||
-      twist.size() != servo.settings().rows.size() || jacobian.shape(0) != 6 || jacobian.shape(1) != nv)
-    throw std::invalid_argument("q, jacobian, twist, rates or next has the wrong size");
-  const double *source = jacobian.data();
-  const std::int64_t row_stride = jacobian.stride(0), column_stride = jacobian.stride(1);
-  for (std::size_t c = 0; c < nv; ++c)
-    for (int r = 0; r < 6; ++r) kinematics.jacobian(r, c) = source[r * row_stride + c * column_stride];
+// numpy arrays in and out of the per-call step, through numpy's C API: a step costs about a
+// microsecond, and nanobind's ndarray casters cost a fifth of that per array.
+
+// The array behind object when it is a float64 array of the given shape (columns 0: 1-D;
+// the exact numpy.ndarray type, aligned, native byte order, any strides), else nullptr: the
+// caller hands the step to Python's checks, which convert or refuse what this does not read.
+PyArrayObject *float_array(PyObject *object, npy_intp rows, npy_intp columns = 0) {
+  if (Py_TYPE(object) != &PyArray_Type) return nullptr;
+  auto *array = reinterpret_cast<PyArrayObject *>(object);
+  const int ndim = columns ? 2 : 1;
+  if (PyArray_NDIM(array) != ndim || PyArray_TYPE(array) != NPY_DOUBLE || !PyArray_ISBEHAVED_RO(array) ||
+      PyArray_DIM(array, 0) != rows || (columns && PyArray_DIM(array, 1) != columns))
+    return nullptr;
+  return array;
+}
+
+// array[i] (1-D) and array[r, c] (2-D) whatever the strides.
+double item(PyArrayObject *array, npy_intp i) {
+  return *reinterpret_cast<const double *>(PyArray_BYTES(array) + i * PyArray_STRIDE(array, 0));
+}
+double item(PyArrayObject *array, npy_intp r, npy_intp c) {
+  return *reinterpret_cast<const double *>(PyArray_BYTES(array) + r * PyArray_STRIDE(array, 0) +
+                                           c * PyArray_STRIDE(array, 1));
+}
+
+// A new float64 array of n entries (owned by the caller), its data.
+nb::object new_vector(npy_intp n, double *&data) {
+  PyObject *array = PyArray_SimpleNew(1, &n, NPY_DOUBLE);
+  if (!array) throw nb::python_error();
+  data = static_cast<double *>(PyArray_DATA(reinterpret_cast<PyArrayObject *>(array)));
+  return nb::steal(array);
+}
+
+nb::object copy_of(const Vector &vector) {
+  double *data;
+  nb::object array = new_vector(vector.size(), data);
+  std::copy(vector.data(), vector.data() + vector.size(), data);
+  return array;
+}
+
+// q (nq,) of the caller into the servo's working q, when readable; nullptr else.
+const Vector *read_q(Servo &servo, PyObject *q_object) {
+  Vector &q = servo.working_q();
+  PyArrayObject *array = float_array(q_object, q.size());
+  if (!array) return nullptr;
+  for (npy_intp i = 0; i < q.size(); ++i) q[i] = item(array, i);
+  return &q;
+}
+
+// The twist command (m + k,) into a new array, when readable and check_vector would pass it.
+nb::object read_twist(Servo &servo, PyObject *twist_object, double *&twist) {
+  const npy_intp n = static_cast<npy_intp>(servo.settings().rows.size());
+  PyArrayObject *array = float_array(twist_object, n);
+  if (!array) return nb::none();
+  nb::object copy = new_vector(n, twist);
+  for (npy_intp i = 0; i < n; ++i) twist[i] = item(array, i);
+  if (!servo.admits_twist(twist)) return nb::none();
+  return copy;
+}
+
+// A step the core took: (flags, scale, hit, next q (nq,), rates (nv,), twist (m + k,), seen),
+// each array the caller's own.
+nb::tuple taken_step(const Servo &servo, const Taken &taken, nb::object twist, nb::object seen) {
+  return nb::make_tuple(taken.flags, taken.scale, taken.hit, copy_of(servo.next()), copy_of(servo.rates()),
+                        std::move(twist), std::move(seen));
+}
+
+// What the kinematics pass saw (J row-major (6, nv), then world_T_tip and world_T_sensor as
+// a row-major rotation and a translation each: 6 nv + 24 entries), for the step's Observation.
+nb::object seen(const Kinematics &kinematics) {
+  const npy_intp nv = kinematics.nv();
+  double *data;
+  nb::object array = new_vector(6 * nv + 24, data);
+  for (int r = 0; r < 6; ++r)
+    for (npy_intp c = 0; c < nv; ++c) *data++ = kinematics.jacobian(r, c);
+  for (const SE3 *pose : {&kinematics.world_T_tip, &kinematics.world_T_sensor}) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) *data++ = pose->rotation()(r, c);
+    for (int r = 0; r < 3; ++r) *data++ = pose->translation()[r];
+  }
+  return array;
+}
+
+// One Controller.step from Python with everything Python does before and in it (see
+// pinrate.control.core_step): q checked as Robot.check_q and check_inside_limits check it, the
+// twist as check_vector does (or, target given (4, 4), gain times the pose error to it), the
+// kinematics pass, advance. None where Python must check the inputs (an input not a float
+// array of its shape, or one its checks refuse: they say what is wrong), False where the step
+// is Python's; else taken_step's tuple, seen what the pass saw.
+nb::object step_at(Servo &servo, nb::handle q_object, nb::handle command, nb::handle target_object, double gain) {
+  const Vector *q = read_q(servo, q_object.ptr());
+  if (!q) return nb::none();
+  double *twist;
+  nb::object twist_array;
+  SE3 target;
+  const bool pose = !target_object.is_none();
+  if (pose) {
+    PyArrayObject *homogeneous = float_array(target_object.ptr(), 4, 4);
+    if (!homogeneous) return nb::none();
+    Eigen::Matrix3d rotation;
+    Eigen::Vector3d translation;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) rotation(r, c) = item(homogeneous, r, c);
+      translation[r] = item(homogeneous, r, 3);
+    }
+    target = SE3(rotation, translation);
+    twist_array = new_vector(static_cast<npy_intp>(servo.settings().rows.size()), twist);
+  } else {
+    twist_array = read_twist(servo, command.ptr(), twist);
+    if (twist_array.is_none()) return twist_array;
+  }
+  if (!servo.admits(*q)) return nb::none();
   Taken taken;
-  const bool stepped = servo.step(q.data(), twist.data(), rates.data(), next.data(), taken);
-  return nb::make_tuple(stepped, taken.flags, taken.scale, taken.hit);
+  if (!servo.step_at(*q, pose ? &target : nullptr, gain, twist, taken)) return nb::bool_(false);
+  return taken_step(servo, taken, std::move(twist_array), seen(servo.kinematics()));
+}
+
+// One Controller.step from the caller's Observation (q (nq,) and J (6, nv), sensor axes, any
+// strides) and twist (m + k,): q inside the limits, the twist checked, advance. None, False or
+// taken_step's tuple (seen None: the caller has its Observation), as step_at.
+nb::object step_given(Servo &servo, nb::handle q_object, nb::handle jacobian_object, nb::handle command) {
+  const Vector *q = read_q(servo, q_object.ptr());
+  Kinematics &kinematics = servo.kinematics();
+  PyArrayObject *jacobian = float_array(jacobian_object.ptr(), 6, kinematics.nv());
+  if (!q || !jacobian) return nb::none();
+  double *twist;
+  nb::object twist_array = read_twist(servo, command.ptr(), twist);
+  if (twist_array.is_none() || !servo.admits(*q)) return nb::none();
+  for (npy_intp c = 0; c < kinematics.nv(); ++c)
+    for (int r = 0; r < 6; ++r) kinematics.jacobian(r, c) = item(jacobian, r, c);
+  Taken taken;
+  if (!servo.step_from_jacobian(*q, twist, taken)) return nb::bool_(false);
+  return taken_step(servo, taken, std::move(twist_array), nb::none());
 }
 
 // rho at each configuration (N, nq); the servo's settings give the partition. The map runs
@@ -310,15 +431,18 @@ double solve_timing(Servo &servo, Array<const double> q, Array<const double> twi
 }  // namespace
 
 NB_MODULE(pinrate_core, module) {
+  if (PyArray_ImportNumPyAPI() < 0) throw nb::python_error();
   module.doc() = "pinrate's compiled core: whole servo loops and rho maps on header-only Pinocchio";
   // pinrate keeps a Kinematics per Robot until exit; that is no leak worth a warning.
   nb::set_leak_warnings(false);
   module.attr("PINOCCHIO_VERSION") = PINOCCHIO_VERSION;
-  module.attr("ABI") = 4;  // bumped when pinrate.compiled must change with it
+  module.attr("ABI") = 5;  // bumped when pinrate.compiled must change with it
 
   // boundary.hpp's constants, which pinrate.compiled.boundary checks at load.
   module.attr("SINGULAR_RATIO") = kSingularRatio;
   module.attr("FLAT") = kFlat;
+  module.attr("PHYSICAL_BOUND") = kPhysicalBound;
+  module.attr("UNIT_TOLERANCE") = kUnitTolerance;
   nb::list kernels, outcomes, measurable, joint_kinds_list;
   for (const char *name : kKernelNames) kernels.append(name);
   module.attr("KERNELS") = tuple_of(kernels);
@@ -374,7 +498,9 @@ NB_MODULE(pinrate_core, module) {
       .def("run", &run_servo, nb::kw_only(), "q0"_a, "target"_a, "gain"_a, "tol"_a, "stall_steps"_a, "max_steps"_a,
            "divergence_factor"_a, "stall_improvement"_a, "step_number"_a, "best"_a, "progress"_a, "progress_step"_a,
            "q"_a, "rates"_a, "position"_a, "orientation"_a, "radius"_a, "flags"_a, "scale"_a, "hit"_a)
-      .def("step", &step_once, nb::kw_only(), "q"_a, "jacobian"_a, "twist"_a, "rates"_a, "next"_a)
+      // .none(): any object reaches the step (None included), which reads what it can.
+      .def("step_at", &step_at, "q"_a.none(), "twist"_a.none(), "target"_a.none(), "gain"_a)
+      .def("step_given", &step_given, "q"_a.none(), "jacobian"_a.none(), "twist"_a.none())
       .def("spectral_radius_at", &spectral_radius_at)
       .def("solve_timing", &solve_timing);
 }

@@ -8,9 +8,9 @@
 // the loop goes on. So each rule is written once in full (in Python) and the common path
 // twice (here, and there), and the test of the two paths holds them together.
 //
-// That common path is one member, advance(), which the loop runs each step and step() runs
+// That common path is one member, advance(), which the loop runs each step and step_at() runs
 // for a single Controller.step called from Python (pinrate.control.core_step), with the same
-// hand-back.
+// hand-back, after the checks Python makes before a step (admits, admits_twist).
 #pragma once
 
 #include <Eigen/LU>
@@ -212,20 +212,62 @@ class Servo {
     return true;
   }
 
-  // Controller.step per call, at q (nq,) with kin_.jacobian already J at q (the caller's
-  // kinematics pass): the blocks from it, then advance; rates (nv,) and next (nq,) written.
-  // false: the step is Python's (rates and next then undefined).
-  bool step(const double *q, double *twist, double *rates, double *next, Taken &taken) {
-    const int nq = kin_.nq(), nv = kin_.nv();
-    if (q_.size() != nq) q_.resize(nq), next_.resize(nq), rates_.resize(nv);
-    std::copy(q, q + nq, q_.data());
-    const Blocks parts = s_.small ? blocks() : Blocks{};
-    Matrix R = !s_.small || s_.measure_j ? reduced() : Matrix();
-    if (!advance(q_, twist, parts, R, rates_, next_, taken)) return false;
-    std::copy(rates_.data(), rates_.data() + nv, rates);
-    std::copy(next_.data(), next_.data() + nq, next);
+  // Robot.check_q and Controller.check_inside_limits at q (nq,): every entry finite and
+  // within the physical bound, each continuous joint's (cos, sin) pair of unit norm (the same
+  // Pinocchio test on the same joints), q inside the limits the controller keeps. false:
+  // Python's checks say what is wrong.
+  bool admits(const Vector &q) const {
+    for (int i = 0; i < q.size(); ++i)
+      if (!(std::fabs(q[i]) <= kPhysicalBound)) return false;
+    return pinocchio::isNormalized(kin_.model, q, kUnitTolerance) && inside(q);
+  }
+
+  // Controller.check_inside_limits: q (nq,) inside every limit the controller keeps.
+  bool inside(const Vector &q) const {
+    if (!s_.position_limits) return true;
+    for (const Limit &limit : s_.limits) {
+      const double value = q[limit.q_index];
+      if (!(limit.lower <= value && value <= limit.upper)) return false;
+    }
     return true;
   }
+
+  // checks.check_vector's test of a twist (m + k,): every entry finite and within the bound.
+  bool admits_twist(const double *twist) const {
+    for (int i = 0; i < s_.m + k_; ++i)
+      if (!(std::fabs(twist[i]) <= kPhysicalBound)) return false;
+    return true;
+  }
+
+  // Controller.step per call at an admitted q (nq,): the kinematics pass (kin_ then holds J
+  // and the poses at q), the twist -- the command's (m + k,; partition order, sensor axes),
+  // or, with a target, gain times the pose error to it, written into twist -- then advance;
+  // rates() and next() hold the step. false: the step is Python's.
+  bool step_at(const Vector &q, const SE3 *target, double gain, double *twist, Taken &taken) {
+    kin_.compute(q);
+    if (target != nullptr) {
+      const Eigen::Matrix<double, 6, 1> error = kin_.pose_error(*target);
+      for (int r = 0; r < s_.m + k_; ++r) twist[r] = gain * error[s_.rows[r]];
+    }
+    return step_from_jacobian(q, twist, taken);
+  }
+
+  // Controller.step per call at q (nq,) with kin_.jacobian already J at q (the caller's
+  // kinematics pass): the blocks from it, then advance.
+  bool step_from_jacobian(const Vector &q, double *twist, Taken &taken) {
+    const Blocks parts = s_.small ? blocks() : Blocks{};
+    Matrix R = !s_.small || s_.measure_j ? reduced() : Matrix();
+    return advance(q, twist, parts, R, rates_, next_, taken);
+  }
+
+  // The per-call step's vectors: q (nq,) as the caller fills it, and the step's rates (nv,)
+  // and next q (nq,).
+  Vector &working_q() {
+    if (q_.size() != kin_.nq()) q_.resize(kin_.nq()), next_.resize(kin_.nq()), rates_.resize(kin_.nv());
+    return q_;
+  }
+  const Vector &rates() const { return rates_; }
+  const Vector &next() const { return next_; }
 
   int n() const { return n_; }
 
@@ -239,7 +281,7 @@ class Servo {
   Settings s_;
   int n_ = 0, k_ = 0;
   Vector displacement_;       // rates * dt, kept across steps: a step allocates no vector of nv
-  Vector q_, rates_, next_;  // step()'s working copies, sized on its first call
+  Vector q_, rates_, next_;  // the per-call step's vectors, sized on its first call (working_q)
 
   // spatial.saturate_twist: the whole twist scaled by one factor, the largest that meets both
   // speed limits, so the commanded screw keeps its direction (the same operations as Python).

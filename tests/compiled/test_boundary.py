@@ -14,6 +14,7 @@ import pytest
 
 import pinrate
 from compiled_core import needs_core, path
+from pinrate import checks
 from pinrate.compiled import boundary, core
 from pinrate.compiled.boundary import KERNELS, MEASURABLE, ServoSettings, disagreements
 from pinrate.compiled.kinematics import core_kinematics
@@ -22,6 +23,7 @@ from pinrate.control import compiled_twin
 from pinrate.control.controller import Controller
 from pinrate.control.singularity import measured_blocks
 from pinrate.errors import UnsupportedByCoreError
+from pinrate.kinematics import kinematic_model
 from pinrate.solvers import eigen, singular
 
 
@@ -114,6 +116,8 @@ def _times_ten(value: float) -> float:
 CHANGES: list[tuple[object, str, Callable[[Any], Any], str]] = [
     (singular, "SINGULAR_RATIO", _times_ten, "SINGULAR_RATIO"),
     (eigen, "FLAT", _times_ten, "FLAT"),
+    (checks, "PHYSICAL_BOUND", _times_ten, "PHYSICAL_BOUND"),
+    (kinematic_model, "UNIT_TOLERANCE", _times_ten, "UNIT_TOLERANCE"),
     (boundary, "KERNELS", lambda kernels: (kernels[1], kernels[0], *kernels[2:]), "KERNELS"),
     (boundary, "OUTCOMES", lambda outcomes: (*outcomes, "INTERRUPTED"), "OUTCOMES"),
     (boundary, "STEP_FLAGS", lambda flags: {**flags, "CLAMPED": 8}, "STEP_FLAGS"),

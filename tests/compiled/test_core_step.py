@@ -35,9 +35,9 @@ def taken() -> Iterator[list[bool]]:
     calls: list[bool] = []
     original = core_step.CoreStep.__call__
 
-    def counted(self: core_step.CoreStep, *arguments: object) -> pinrate.Step | None:
+    def counted(self: core_step.CoreStep, *arguments: object) -> pinrate.Step | bool | None:
         step = original(self, *arguments)  # type: ignore[arg-type]
-        calls.append(step is not None)
+        calls.append(isinstance(step, pinrate.Step))
         return step
 
     with pytest.MonkeyPatch.context() as patch:

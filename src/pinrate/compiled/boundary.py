@@ -4,9 +4,10 @@ compared with the core's own definitions (``core/src/boundary.hpp``) when the co
 Names cross, not positions: :class:`ServoSettings` fills ``pinrate_core.Settings`` field by
 field, by name; the algorithm crosses as its name, the measured blocks as their letters.
 The constants both sides use (the singularity rule's ratio, the Viète cut of the 3x3
-eigenvalues), the names they share (kernels, outcomes, step flags, measured blocks, joint
-kinds) and the settings' field names are checked by :func:`disagreements`; a core that
-differs in any is not used (:func:`pinrate.backend` says which).
+eigenvalues, the input checks' physical bound and unit tolerance), the names they share
+(kernels, outcomes, step flags, measured blocks, joint kinds) and the settings' field names
+are checked by :func:`disagreements`; a core that differs in any is not used
+(:func:`pinrate.backend` says which).
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ from dataclasses import dataclass, fields
 from types import ModuleType
 from typing import Any
 
+from .. import checks
+from ..kinematics import kinematic_model
 from ..solvers import eigen, singular
 from ..solvers.singular import PINV_RCOND
 
@@ -135,6 +138,8 @@ def _ours() -> dict[str, Any]:
     return {
         "SINGULAR_RATIO": singular.SINGULAR_RATIO,
         "FLAT": eigen.FLAT,
+        "PHYSICAL_BOUND": checks.PHYSICAL_BOUND,
+        "UNIT_TOLERANCE": kinematic_model.UNIT_TOLERANCE,
         "KERNELS": KERNELS,
         "OUTCOMES": OUTCOMES,
         "STEP_FLAGS": STEP_FLAGS,

@@ -42,7 +42,7 @@ def core_settings(core: ModuleType, settings: ServoSettings) -> Any:
 
 class CoreServo:
     """A controller's compiled twin: ``run`` is the servo loop, ``spectral_radius_at`` the
-    ρ map, both in C++ (the GIL released); ``step_function`` one control step per call."""
+    ρ map, both in C++ (the GIL released); ``step_functions`` one control step per call."""
 
     def __init__(self, robot: Robot, settings: ServoSettings) -> None:
         kinematics = core_kinematics(robot)
@@ -58,12 +58,14 @@ class CoreServo:
         self._servo = core.Servo(kinematics, core_settings(core, settings))
         self.nq, self.nv = kinematics.nq, kinematics.nv
 
-    def step_function(self) -> Callable[..., tuple[bool, int, float, int]]:
-        """The core's one control step, called per step with no wrapper between (see
-        ``core/src/module.cpp``'s ``step_once``): ``(q=, jacobian=, twist=, rates=, next=)``
-        -> (taken, flags, scale, hit); the twist saturated in place, rates and next written."""
-        step: Callable[..., tuple[bool, int, float, int]] = self._servo.step
-        return step
+    def step_functions(self) -> tuple[Callable[..., Any], Callable[..., Any]]:
+        """The core's one control step per call, called with no wrapper between (see
+        ``core/src/module.cpp``): ``step_at(q, twist, target, gain)`` from q (the checks,
+        the kinematics pass, a twist or, with a (4, 4) target, gain times the pose error) and
+        ``step_given(q, jacobian, twist)`` from the caller's J. Each returns None where
+        Python must check the inputs, False where the step is Python's, else (flags, scale,
+        hit, next q, rates, twist saturated, what the kinematics pass saw or None)."""
+        return self._servo.step_at, self._servo.step_given
 
     def run(self, **arguments: Any) -> tuple[int, int, float, float, int]:
         """The servo loop, every argument by its name (see ``core/src/module.cpp``'s

@@ -47,7 +47,7 @@ from . import compiled_twin
 from .collision import monitor_for
 from .commands import JointJog, PoseGoal, Uncoupled
 from .context import StepContext
-from .core_step import CorePath
+from .core_step import CorePath, Sight
 from .elbow import Elbow
 from .finish import Finish
 from .joint_space import JointSpace
@@ -220,7 +220,8 @@ class Controller:
             robot, self.dt, self._positions, self.rate_limits, self._accelerations, self.collision, self.auxiliary
         )
         self._joint_space = JointSpace(self.context, facts, self._positions, self._finish)
-        self._core_step = CorePath(self.compiled, facts.limits)
+        sight = Sight(self.algorithm, index, robot.nv, robot.sensor_id == robot.tip_id)
+        self._core_step = CorePath(self.compiled, facts.limits, sight, self._wanted_twist)
         self._built = True
 
     def __setattr__(self, name: str, value: object) -> None:
@@ -259,8 +260,7 @@ class Controller:
         self._positions.check_inside(q)
 
     def position_limit(self, number: int) -> Limit:
-        """The ``number``-th position limit the controller keeps (the compiled core names a
-        clamped joint by it)."""
+        """The ``number``-th position limit kept (the compiled core names a clamped joint by it)."""
         return self.joint_limits[number]
 
     def reset(self) -> None:
@@ -283,10 +283,9 @@ class Controller:
     def observe_unchecked(self, q: np.ndarray, goal: PoseGoal | None = None) -> Observation:
         """:meth:`observe` at a q that already went through :meth:`Robot.check_q` (or came out
         of a step): the servo's hot path."""
-        index = self.index
         jacobian, world_T_tip, world_T_sensor = self.robot.kinematics(q)
-        error = None if goal is None else pose_error(world_T_tip, world_T_sensor, goal.target)[index.rows]
-        return Observation(q, jacobian, world_T_tip, world_T_sensor, self.algorithm, index, goal, error)
+        error = None if goal is None else pose_error(world_T_tip, world_T_sensor, goal.target)[self.index.rows]
+        return Observation(q, jacobian, world_T_tip, world_T_sensor, self.algorithm, self.index, goal, error)
 
     def conditioning(self, q: object) -> Conditioning:
         """The least inverse condition number σ_r/σ_1 of the blocks the algorithm inverts at q,
@@ -334,6 +333,9 @@ class Controller:
         NaN or inf.
         Where the core covers the controller, twist and pose steps run in it (:mod:`.core_step`).
         """
+        taken = None if (core := self._core_step()) is None else core(q, command, observation)
+        if taken:  # a Step; else None (the inputs go through Python's checks first) or False (Python's step)
+            return taken
         if observation is None:
             observation = self.observe(q)
         self.check_inside_limits(observation.q)
@@ -341,10 +343,8 @@ class Controller:
             return self._joint_space.step(observation, command)
         if not isinstance(command, PoseGoal):
             command = check_vector(command, self.index.rows.size, "twist (linear then angular components)")
-        core = self._core_step()
-        taken = None if core is None else core(observation, self._wanted_twist(observation, command))
-        if taken is not None:  # else Python's: no core, or a step that needs more than its path
-            return taken
+        if taken is None and core is not None and (taken := core(q, command, observation)):
+            return taken  # inputs the core could not read (a list, say), now checked and converted
         twist, saturated = self.command_twist(observation, command)
         statuses = [Status.TWIST_SATURATED] if saturated else []
         details: list[str] = []

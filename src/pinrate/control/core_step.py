@@ -1,12 +1,15 @@
 """The control step in the compiled core, per call, and the words of a step the core took.
 
-:meth:`Controller.step <pinrate.control.controller.Controller.step>` hands a twist step to
-:class:`CoreStep` where the core covers the controller (:mod:`.compiled_twin`'s allow-list):
-the core runs the step's common path (saturation, the conditioning bound, the algorithm, the
-position-limit test, the decelerate look-ahead, the velocity scale, integration over dt, the
-clamp; ``core/src/servo.hpp``'s ``Servo::advance``, the servo loop's own) on the J of the
-caller's observation, and hands back, to the Python stages, any step that needs more (the
+:meth:`Controller.step <pinrate.control.controller.Controller.step>` hands a twist or pose
+step to :class:`CoreStep` where the core covers the controller (:mod:`.compiled_twin`'s
+allow-list): in one call the core checks q and the twist as Python would, makes the
+kinematics pass (or takes the caller's observation), and runs the step's common path
+(saturation, the conditioning bound, the algorithm, the position-limit test, the decelerate
+look-ahead, the velocity scale, integration over dt, the clamp; ``core/src/servo.hpp``'s
+``Servo::advance``, the servo loop's own). It hands back, to Python, any input its checks
+refuse (Python's checks then raise their own words) and any step that needs more (the
 singular region, a joint passing a limit, a singular block, a big step near the region).
+The step's :class:`CoreObservation` is made from the pass when it is first read.
 
 A step the core took is said by its flags (SATURATED, RATE_LIMITED, CLAMPED), its velocity
 scale and the first limit it clamped: :data:`CONDITIONS` and :func:`core_detail` turn them
@@ -17,11 +20,16 @@ per-call step and the servo loop's log alike (the one mapping).
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import MISSING, dataclass, fields
+from typing import TYPE_CHECKING
 
 import numpy as np
+import pinocchio as pin
 
 from ..compiled import CoreServo, chosen, core_module
 from ..compiled.boundary import CLAMPED, RATE_LIMITED, SATURATED, STEP_FLAGS
+from ..kinematics.partition import PartitionIndex
+from .commands import PoseGoal
 from .limits.position import reached_detail
 from .limits.velocity import scaled_detail
 from .observation import Observation, Step
@@ -62,33 +70,110 @@ def core_detail(flags: int, scale: float, limit: Callable[[], Limit], next_q: np
     return "; ".join(parts)
 
 
+class CoreObservation(Observation):
+    """The :class:`~.observation.Observation` of a step the core took from q: what its
+    kinematics pass saw (J row-major (6, nv), then the tip's and the sensor's pose in the
+    world, each a row-major rotation and a translation in m), made into the Observation's
+    fields on first read: a step whose observation nobody reads does not pay for two
+    ``pin.SE3`` (about a microsecond each)."""
+
+    __slots__ = ("_seen",)
+
+    if not TYPE_CHECKING:  # to mypy, the fields are the Observation's
+
+        def __getattr__(self, name: str) -> object:
+            # Reached only while a field is unset: every field is set from the pass, once.
+            seen = object.__getattribute__(self, "_seen")
+            if seen is not None:
+                self._fill(*seen)
+            return object.__getattribute__(self, name)  # AttributeError for a name no field has
+
+    def _fill(self, q: np.ndarray, seen: np.ndarray, sight: Sight) -> None:
+        nv = sight.nv
+        start = 6 * nv
+        self.q = q
+        self.jacobian = seen[:start].reshape(6, nv)
+        self.world_T_tip = pin.SE3(seen[start : start + 9].reshape(3, 3), seen[start + 9 : start + 12])
+        self.world_T_sensor = (
+            self.world_T_tip
+            if sight.sensor_at_tip
+            else pin.SE3(seen[start + 12 : start + 21].reshape(3, 3), seen[start + 21 : start + 24])
+        )
+        self.algorithm, self.index = sight.algorithm, sight.index
+        for field in _DEFAULTED:
+            setattr(self, field.name, field.default)
+        self._seen = None
+
+
+_DEFAULTED = tuple(field for field in fields(Observation) if field.default is not MISSING)
+"""The Observation's fields a kinematics pass does not give (goal, error, what is cached)."""
+
+
+@dataclass(frozen=True)
+class Sight:
+    """What a controller's :class:`CoreObservation` needs besides the pass: the algorithm,
+    the resolved partition, nv and whether the sensor frame is the tip's."""
+
+    algorithm: str
+    index: PartitionIndex
+    nv: int
+    sensor_at_tip: bool
+
+
 class CoreStep:
-    """A controller's step in the compiled core (``twin``, its :class:`~pinrate.compiled.CoreServo`).
+    """A controller's step in the compiled core (``twin``, its :class:`~pinrate.compiled.CoreServo`),
+    with what Python does before the step: q checked as :meth:`Robot.check_q
+    <pinrate.kinematics.manipulator.Robot.check_q>` and the controller's
+    ``check_inside_limits`` check it, the twist as :func:`~pinrate.checks.check_vector` does,
+    the kinematics pass and a :class:`PoseGoal`'s pose error, in one call.
 
     Args:
         twin: the controller's compiled twin.
         limits: the position limits the controller keeps (the core names a clamped one by its
             number in this tuple).
+        sight: what the step's :class:`CoreObservation` needs.
+        wanted: the controller's twist for a :class:`PoseGoal` at a caller's observation
+            (m + k,; a new array).
     """
 
-    def __init__(self, twin: CoreServo, limits: tuple[Limit, ...]) -> None:
-        self._step = twin.step_function()
+    def __init__(
+        self,
+        twin: CoreServo,
+        limits: tuple[Limit, ...],
+        sight: Sight,
+        wanted: Callable[[Observation, PoseGoal], np.ndarray],
+    ) -> None:
+        self._at, self._given = twin.step_functions()
         self._limits = limits
-        self._nq, self._nv = twin.nq, twin.nv
+        self._sight = sight
+        self._wanted = wanted
 
-    def __call__(self, observation: Observation, twist: np.ndarray) -> Step | None:
-        """The step from ``observation`` (its q and J are the core's input) with ``twist``
-        (m + k,; partition order, sensor axes, m/s and rad/s; a float array of the caller's
-        own, saturated in place): the :class:`~.observation.Step`, or None where the step is
-        Python's."""
-        rates, next_q = np.empty(self._nv), np.empty(self._nq)
-        taken, flags, scale, hit = self._step(
-            q=observation.q, jacobian=observation.jacobian, twist=twist, rates=rates, next=next_q
-        )
-        if not taken:
-            return None
+    def __call__(self, q: object, command: object, observation: Observation | None) -> Step | bool | None:
+        """The step from q (or from the caller's ``observation``, then its q and J) with
+        ``command`` (a twist (m + k,; partition order, sensor axes, m/s and rad/s) or a
+        :class:`PoseGoal`): the :class:`~.observation.Step`; None where Python's checks must
+        see the inputs first (one the core does not read, as a list, or one they refuse:
+        they say what is wrong); False where the step is Python's."""
+        if observation is None:
+            if isinstance(command, PoseGoal):
+                out = self._at(q, None, command.target.homogeneous, command.gain)
+            else:
+                out = self._at(q, command, None, 0.0)
+            if not out:
+                return out  # type: ignore[no-any-return]
+            observation = _new(CoreObservation)
+            observation._seen = (q, out[6], self._sight)
+        else:
+            twist = self._wanted(observation, command) if isinstance(command, PoseGoal) else command
+            out = self._given(observation.q, observation.jacobian, twist)
+            if not out:
+                return out  # type: ignore[no-any-return]
+        flags, scale, hit, next_q, rates, twist, _ = out
         detail = core_detail(flags, scale, lambda: self._limits[hit], next_q) if flags & DETAILED else ""
         return Step(next_q, rates, STATUSES[flags], (), twist, observation, detail, CONDITIONS[flags])
+
+
+_new = object.__new__
 
 
 class CorePath:
@@ -98,21 +183,30 @@ class CorePath:
 
     Args:
         twin: the controller's :meth:`~.controller.Controller.compiled`.
-        limits: the position limits the controller keeps.
+        limits, sight, wanted: as :class:`CoreStep`'s.
     """
 
-    def __init__(self, twin: Callable[[], CoreServo | None], limits: tuple[Limit, ...]) -> None:
+    def __init__(
+        self,
+        twin: Callable[[], CoreServo | None],
+        limits: tuple[Limit, ...],
+        sight: Sight,
+        wanted: Callable[[Observation, PoseGoal], np.ndarray],
+    ) -> None:
         self._twin = twin
-        self._limits = limits
+        self._arguments = (limits, sight, wanted)
         self._steps: dict[str | None, CoreStep | None] = {}
 
     def __call__(self) -> CoreStep | None:
         choice = chosen()
-        steps = self._steps
-        if choice not in steps:
+        step = self._steps.get(choice, _UNKNOWN)
+        if step is _UNKNOWN:
             twin = None if core_module() is None else self._twin()
-            steps[choice] = None if twin is None else CoreStep(twin, self._limits)
-        return steps[choice]
+            step = self._steps[choice] = None if twin is None else CoreStep(twin, *self._arguments)
+        return step  # type: ignore[return-value]
 
 
-__all__ = ["CONDITIONS", "STATUSES", "CorePath", "CoreStep", "core_detail"]
+_UNKNOWN = object()
+
+
+__all__ = ["CONDITIONS", "STATUSES", "CoreObservation", "CorePath", "CoreStep", "Sight", "core_detail"]
