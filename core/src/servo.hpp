@@ -61,6 +61,10 @@ struct Settings {
   double pinv_rcond{};
 };
 
+// A square block of J of at most 6 x 6 (a square reduced J), kept on the stack: Eigen's
+// LU and inverse make the same operations as on an Eigen::MatrixXd, without the allocations.
+using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+
 struct Blocks {
   Block A, B, U, W;
 };
@@ -313,11 +317,11 @@ class Servo {
   double conditioning_bound(const Blocks &b, const Matrix &R) const {
     double bound = INFINITY;
     if (s_.measure_j) {
-      Eigen::MatrixXd scaled = R;
+      if (R.rows() != R.cols()) return 0.0;
+      Square scaled = R;  // at most 6 x 6: on the stack
       for (int r = 0; r < scaled.rows(); ++r) scaled.row(r) *= s_.row_scale[r];
-      if (scaled.rows() != scaled.cols()) return 0.0;
-      Eigen::PartialPivLU<Eigen::MatrixXd> lu(scaled);
-      const Eigen::MatrixXd inverse = lu.inverse();
+      Eigen::PartialPivLU<Square> lu(scaled);
+      const Square inverse = lu.inverse();
       const double matrix_norm2 = scaled.squaredNorm(), inverse_norm2 = inverse.squaredNorm();
       const double product = matrix_norm2 * inverse_norm2;
       if (!(product > 0.0) || !std::isfinite(product)) return 0.0;
@@ -346,7 +350,7 @@ class Servo {
         // it betrays a singular J; else (and for a J not square) the least-squares J^+ s.
         bool solved_square = false;
         if (J.rows() == J.cols() && J.rows() > 0) {
-          solved = J.partialPivLu().solve(command);
+          solved = Square(J).partialPivLu().solve(command);  // at most 6 x 6: on the stack
           const double growth = J.squaredNorm() * solved.squaredNorm() * (s_.exact_rcond * s_.exact_rcond);
           solved_square = growth <= command.squaredNorm();
         }

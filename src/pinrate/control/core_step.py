@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import MISSING, dataclass, fields
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import pinocchio as pin
@@ -78,6 +78,7 @@ class CoreObservation(Observation):
     ``pin.SE3`` (about a microsecond each)."""
 
     __slots__ = ("_seen",)
+    _seen: tuple[object, np.ndarray, Sight] | None  # (q, the pass, sight) until the fields are set
 
     if not TYPE_CHECKING:  # to mypy, the fields are the Observation's
 
@@ -89,6 +90,7 @@ class CoreObservation(Observation):
             return object.__getattribute__(self, name)  # AttributeError for a name no field has
 
     def _fill(self, q: np.ndarray, seen: np.ndarray, sight: Sight) -> None:
+        """Every field from the kinematics pass (``seen``) at ``q``; nothing is left to fill."""
         nv = sight.nv
         start = 6 * nv
         self.q = q
@@ -148,7 +150,7 @@ class CoreStep:
         self._sight = sight
         self._wanted = wanted
 
-    def __call__(self, q: object, command: object, observation: Observation | None) -> Step | bool | None:
+    def __call__(self, q: object, command: object, observation: Observation | None) -> Step | Literal[False] | None:
         """The step from q (or from the caller's ``observation``, then its q and J) with
         ``command`` (a twist (m + k,; partition order, sensor axes, m/s and rad/s) or a
         :class:`PoseGoal`): the :class:`~.observation.Step`; None where Python's checks must
@@ -160,14 +162,14 @@ class CoreStep:
             else:
                 out = self._at(q, command, None, 0.0)
             if not out:
-                return out  # type: ignore[no-any-return]
+                return out  # the core's None or False
             observation = _new(CoreObservation)
             observation._seen = (q, out[6], self._sight)
         else:
             twist = self._wanted(observation, command) if isinstance(command, PoseGoal) else command
             out = self._given(observation.q, observation.jacobian, twist)
             if not out:
-                return out  # type: ignore[no-any-return]
+                return out
         flags, scale, hit, next_q, rates, twist, _ = out
         detail = core_detail(flags, scale, lambda: self._limits[hit], next_q) if flags & DETAILED else ""
         return Step(next_q, rates, STATUSES[flags], (), twist, observation, detail, CONDITIONS[flags])
