@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import MISSING, dataclass, fields
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pinocchio as pin
@@ -74,41 +74,48 @@ class CoreObservation(Observation):
     """The :class:`~.observation.Observation` of a step the core took from q: what its
     kinematics pass saw (J row-major (6, nv), then the tip's and the sensor's pose in the
     world, each a row-major rotation and a translation in m), made into the Observation's
-    fields on first read: a step whose observation nobody reads does not pay for two
-    ``pin.SE3`` (about a microsecond each)."""
+    fields on first read, the poses apart: a step whose observation nobody reads does not
+    pay for it, and one read for J and ρ (the console's readout) not for two ``pin.SE3``
+    (about a microsecond each)."""
 
     __slots__ = ("_seen",)
-    _seen: tuple[object, np.ndarray, Sight] | None  # (q, the pass, sight) until the fields are set
+    _seen: tuple[Any, np.ndarray, Sight]  # (q, the caller's float array the core read; the pass; sight)
 
     if not TYPE_CHECKING:  # to mypy, the fields are the Observation's
 
         def __getattr__(self, name: str) -> object:
-            # Reached only while a field is unset: every field is set from the pass, once.
-            seen = object.__getattribute__(self, "_seen")
-            if seen is not None:
-                self._fill(*seen)
+            # Reached only while a field is unset: its group is set from the pass, once.
+            if name in _POSES:
+                self._set_poses(*object.__getattribute__(self, "_seen"))
+            elif name in _OTHERS:
+                self._set_others(*object.__getattribute__(self, "_seen"))
             return object.__getattribute__(self, name)  # AttributeError for a name no field has
 
-    def _fill(self, q: np.ndarray, seen: np.ndarray, sight: Sight) -> None:
-        """Every field from the kinematics pass (``seen``) at ``q``; nothing is left to fill."""
-        nv = sight.nv
-        start = 6 * nv
+    def _set_others(self, q: np.ndarray, seen: np.ndarray, sight: Sight) -> None:
+        """q, J (a view of the pass), the algorithm, the partition and the defaulted fields."""
         self.q = q
-        self.jacobian = seen[:start].reshape(6, nv)
+        self.jacobian = seen[: 6 * sight.nv].reshape(6, sight.nv)
+        self.algorithm, self.index = sight.algorithm, sight.index
+        for field in _DEFAULTED:
+            setattr(self, field.name, field.default)
+
+    def _set_poses(self, q: np.ndarray, seen: np.ndarray, sight: Sight) -> None:
+        """world_T_tip and world_T_sensor (the same object when the sensor is the tip, as
+        :meth:`Robot.kinematics <pinrate.kinematics.manipulator.Robot.kinematics>` gives)."""
+        start = 6 * sight.nv
         self.world_T_tip = pin.SE3(seen[start : start + 9].reshape(3, 3), seen[start + 9 : start + 12])
         self.world_T_sensor = (
             self.world_T_tip
             if sight.sensor_at_tip
             else pin.SE3(seen[start + 12 : start + 21].reshape(3, 3), seen[start + 21 : start + 24])
         )
-        self.algorithm, self.index = sight.algorithm, sight.index
-        for field in _DEFAULTED:
-            setattr(self, field.name, field.default)
-        self._seen = None
 
 
 _DEFAULTED = tuple(field for field in fields(Observation) if field.default is not MISSING)
 """The Observation's fields a kinematics pass does not give (goal, error, what is cached)."""
+
+_POSES = frozenset({"world_T_tip", "world_T_sensor"})
+_OTHERS = frozenset(field.name for field in fields(Observation)) - _POSES
 
 
 @dataclass(frozen=True)
