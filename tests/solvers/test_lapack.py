@@ -39,3 +39,16 @@ def test_a_singular_matrix_raises_numpys_error_without_a_warning() -> None:
             lapack.solve(singular, np.ones(2))
         with pytest.raises(np.linalg.LinAlgError, match="Singular matrix"):
             lapack.inverse(singular)
+
+
+def test_the_callers_error_state_is_kept() -> None:
+    # The singular matrix raises under LAPACK's error state; the caller's is back afterwards.
+    before = np.geterr()
+    with np.errstate(invalid="raise"), pytest.raises(np.linalg.LinAlgError):
+        lapack.inverse(np.zeros((3, 3)))
+    assert np.geterr() == before
+    with np.errstate(all="ignore"):
+        assert np.geterr()["invalid"] == "ignore"
+        with pytest.raises(np.linalg.LinAlgError):
+            lapack.solve(np.zeros((3, 3)), np.ones(3))
+        assert np.geterr()["invalid"] == "ignore"
