@@ -23,18 +23,19 @@ def _singular(error: str, flag: int) -> None:
 
 try:  # numpy's private internals, guarded: numpy's public functions below where they differ
     from numpy._core._multiarray_umath import _make_extobj
-    from numpy._core._ufunc_config import _extobj_contextvar
+    from numpy._core._ufunc_config import _extobj_contextvar  # type: ignore[attr-defined]
     from numpy.linalg._umath_linalg import inv as _inv
     from numpy.linalg._umath_linalg import solve as _solve
     from numpy.linalg._umath_linalg import solve1 as _solve1
 
     # numpy.linalg's error state around these gufuncs: "invalid" (LAPACK's singular) raises.
     _NUMPY_LINALG_STATE = _make_extobj(call=_singular, invalid="call", over="ignore", divide="ignore", under="ignore")
+    _INTERNALS = True
 except (ImportError, AttributeError, TypeError):  # pragma: no cover  # another numpy: its own functions
-    _solve1 = None
+    _INTERNALS = False
 
 
-if _solve1 is not None:
+if _INTERNALS:
 
     def solve(M: np.ndarray, b: np.ndarray) -> np.ndarray:
         """X with M X = b, for a float (n, n) M and an (n,) or (n, r) b: ``numpy.linalg.solve(M,
@@ -42,7 +43,7 @@ if _solve1 is not None:
         ``numpy.linalg.LinAlgError`` where LAPACK finds M singular."""
         token = _extobj_contextvar.set(_NUMPY_LINALG_STATE)
         try:
-            return (_solve1 if b.ndim == 1 else _solve)(M, b, signature="dd->d")  # type: ignore[no-any-return]
+            return (_solve1 if b.ndim == 1 else _solve)(M, b, signature="dd->d")
         finally:
             _extobj_contextvar.reset(token)
 
@@ -51,7 +52,7 @@ if _solve1 is not None:
         ``numpy.linalg.LinAlgError`` where LAPACK finds M singular."""
         token = _extobj_contextvar.set(_NUMPY_LINALG_STATE)
         try:
-            return _inv(M, signature="d->d")  # type: ignore[no-any-return]
+            return _inv(M, signature="d->d")
         finally:
             _extobj_contextvar.reset(token)
 
