@@ -69,8 +69,9 @@ def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
             rates = None
         if rates is not None:
             flat = J.ravel()
-            growth = float(flat @ flat) * float(rates @ rates) * EXACT_RCOND**2
-            if growth <= float(twist @ twist):  # also False for NaN/inf rates
+            # ndarray.dot: the same BLAS dot as @ on vectors, without matmul's dispatch.
+            growth = float(flat.dot(flat)) * float(rates.dot(rates)) * EXACT_RCOND**2
+            if growth <= float(twist.dot(twist)):  # also False for NaN/inf rates
                 return rates
     return np.linalg.pinv(J, rcond=PINV_RCOND) @ twist if J.size else np.zeros(cols)
 
