@@ -64,11 +64,11 @@ def partition_rates(
     if index.small and entry.closed_form is not None:
         if parts is None:
             parts = closed_form.blocks(J, index.selectors)
-        solved = closed_form.block_rates(entry.closed_form, parts, twist)
+        floats = closed_form.block_rates(entry.closed_form, parts, twist)
         if index.all_columns:
-            return np.array(solved)
+            return np.array(floats)
         rates = np.zeros(J.shape[1])
-        rates[index.columns] = solved
+        rates[index.columns] = floats
         return rates
     if index.columns.size == 0:
         return np.zeros(J.shape[1])
