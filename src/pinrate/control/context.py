@@ -7,7 +7,7 @@ the controller, so they import nothing above them."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -15,8 +15,10 @@ from ..errors import SingularBlockError
 from ..kinematics.axes import joint_unit, joint_value
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex
+from ..solvers import lapack
 from ..solvers.conditioning import inverse_condition_bound
 from ..solvers.rates import partition_rates
+from ..solvers.registry import REGISTRY
 from .observation import Observation
 from .singular_region import NOISE_FLOOR, Conditioning, conditioning
 
@@ -36,6 +38,7 @@ class StepContext:
             full generic rank.
         singular_threshold, slow_threshold: inverse condition numbers (dimensionless).
         dt: control period (s); characteristic_length: L (m).
+        closed_form: the algorithm's closed-form kernel solves the partition (made here).
     """
 
     robot: Robot
@@ -54,6 +57,12 @@ class StepContext:
     slow_threshold: float
     dt: float
     characteristic_length: float
+    closed_form: bool = field(init=False)
+
+    def __post_init__(self) -> None:
+        # Whether the algorithm's closed-form kernel solves this partition: only then does
+        # a solve read the observation's blocks (a whole-J solve would make them for nothing).
+        object.__setattr__(self, "closed_form", self.index.small and REGISTRY[self.algorithm].closed_form is not None)
 
     def reduced(self, jacobian: np.ndarray) -> np.ndarray:
         """J restricted to the partition (m + k, n), partition order."""
@@ -83,7 +92,7 @@ class StepContext:
                     return 0.0
                 scaled = self.reduced(observation.jacobian) * self.row_scale_column
                 try:
-                    bound = min(bound, inverse_condition_bound(scaled, np.linalg.inv(scaled)))
+                    bound = min(bound, inverse_condition_bound(scaled, lapack.inverse(scaled)))
                 except np.linalg.LinAlgError:
                     return 0.0
                 continue
@@ -115,7 +124,8 @@ class StepContext:
         """The algorithm's rates with the ``left_out`` joints removed from the partition (they
         get rate 0 here). Raises SingularBlockError as the algorithm does."""
         if not left_out:
-            return partition_rates(observation.jacobian, self.index, twist, self.algorithm, observation.blocks)
+            parts = observation.blocks if self.closed_form else None
+            return partition_rates(observation.jacobian, self.index, twist, self.algorithm, parts)
         partition = self.partition
         reduced = Partition(
             [joint for joint in partition.arm if joint not in left_out],

@@ -47,6 +47,8 @@ class Finish:
         self.accelerations = accelerations
         self.collision = collision
         self.auxiliary = auxiliary
+        self.mimics = robot.mimics if robot.mimics else None
+        """The robot's mimic coupling when it has mimic joints, else None (a step skips it)."""
 
     def __call__(
         self,
@@ -60,15 +62,17 @@ class Finish:
         """The end of every step: the mimic joints driven by their leaders, velocity limits
         (one scale factor), acceleration limits, self-collision, integration over dt, the clamp
         to the position limits, the status."""
-        mimics = self.robot.mimics
+        mimics = self.mimics
         # rate(mimic) = m rate(leader) before any limit sees the rates, and again after a stage
         # that changes joints one by one: q keeps q_mimic = m q_leader + o (the rates said are applied).
-        rates = mimics.drive(rates.copy()) if mimics else rates
+        if mimics is not None:
+            rates = mimics.drive(rates.copy())
         rates = self.rate_limits.apply(rates, statuses, details)
         if self.accelerations is not None:
             rates, stopped = self.accelerations.apply(observation.q, rates, frozen, statuses, details)
             frozen = frozen + tuple(name for name in stopped if name not in frozen)
-            mimics.drive(rates)
+            if mimics is not None:
+                mimics.drive(rates)
         if self.collision is not None:
             verdict = self.collision.limit(observation.q, rates, self.dt)
             if verdict.status is Status.HALT_FOR_COLLISION:
@@ -82,17 +86,19 @@ class Finish:
             self.auxiliary.reach_extension(observation.q, next_q)
         if self.positions.enabled:
             hit = self.positions.clamp(next_q, observation.q, rates)
-            if hit and mimics:
-                mimics.carry(observation.q, next_q, rates, self.dt)
-            mimics.settle(next_q)
+            if mimics is not None:
+                if hit:
+                    mimics.carry(observation.q, next_q, rates, self.dt)
+                mimics.settle(next_q)
             if hit and Status.JOINT_LIMIT not in statuses:
                 statuses.append(Status.JOINT_LIMIT)
                 details.append(hit)
         if self.accelerations is not None:
             self.accelerations.remember(rates)  # the rates applied, after every scaling and the clamp
+        if not statuses:  # the common step: nothing to rank
+            return Step(next_q, rates, Status.OK, frozen, twist, observation, "; ".join(details), ())
         conditions = ranked(statuses)
-        status = conditions[-1] if conditions else Status.OK
-        return Step(next_q, rates, status, frozen, twist, observation, "; ".join(details), conditions)
+        return Step(next_q, rates, conditions[-1], frozen, twist, observation, "; ".join(details), conditions)
 
     def halt(
         self, observation: Observation, twist: np.ndarray, detail: str, status: Status = Status.HALT_FOR_SINGULARITY

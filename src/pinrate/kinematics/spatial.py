@@ -40,8 +40,13 @@ def norm(values: np.ndarray) -> float:
     """The Euclidean norm of a short vector, its squares summed left to right on Python floats
     (the compiled core sums the same way, so the two paths agree to the bit; numpy's BLAS
     may sum in another order)."""
+    return _length(values.tolist())
+
+
+def _length(values: list[float]) -> float:
+    """:func:`norm` of a list of floats."""
     total = 0.0
-    for value in values.tolist():
+    for value in values:
         total += value * value
     return math.sqrt(total)
 
@@ -66,7 +71,8 @@ def saturate_twist(
     so the commanded screw keeps its direction (scaling the two parts apart would bend it);
     and whether it was scaled. The compiled core computes s with the same operations."""
     factor = 1.0
-    linear, angular = norm(twist[:m]), norm(twist[m:])
+    values = twist.tolist()
+    linear, angular = _length(values[:m]), _length(values[m:])
     if linear > max_linear_speed:
         factor = max_linear_speed / linear
     if angular > max_angular_speed:

@@ -64,27 +64,32 @@ def partition_rates(
     if index.small and entry.closed_form is not None:
         if parts is None:
             parts = closed_form.blocks(J, index.selectors)
-        solved = closed_form.block_rates(entry.closed_form, parts, twist)
+        floats = closed_form.block_rates(entry.closed_form, parts, twist)
         if index.all_columns:
-            return np.array(solved)
+            return np.array(floats)
         rates = np.zeros(J.shape[1])
-        rates[index.columns] = solved
+        rates[index.columns] = floats
         return rates
-    rates = np.zeros(J.shape[1])
     if index.columns.size == 0:
-        return rates
+        return np.zeros(J.shape[1])
     reduced = J if index.all_rows and index.all_columns else J[np.ix_(index.rows, index.columns)]
     first = index.position_first and position_first is not False
     if first and entry.position_first is not None:
-        rates[index.columns] = position_first_rates(reduced, index.m, index.arm_columns.size, twist, algorithm)
+        solved = position_first_rates(reduced, index.m, index.arm_columns.size, twist, algorithm)
     elif entry.whole is not None:
-        rates[index.columns] = entry.whole(reduced, twist)
+        solved = entry.whole(reduced, twist)
     else:
         assert entry.blocks is not None
         blocks = split_blocks(reduced, index.m, index.arm_columns.size)
         arm, wrist = entry.blocks(*blocks, twist[: index.m], twist[index.m :])
+        rates = np.zeros(J.shape[1])
         rates[index.arm_columns] = arm
         rates[index.wrist_columns] = wrist
+        return rates
+    if index.all_columns:  # solved is a new array of every column, in order
+        return solved
+    rates = np.zeros(J.shape[1])
+    rates[index.columns] = solved
     return rates
 
 

@@ -20,6 +20,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import SingularBlockError
+from . import lapack
 from .singular import PINV_RCOND, invertible
 
 EXACT_RCOND = 1e-10
@@ -49,7 +50,7 @@ def inverse(M: np.ndarray, block: str) -> np.ndarray:
     column_norms_squared = np.einsum("ij,ij->j", M, M)
     if not invertible(float(np.linalg.det(M)), float(np.prod(column_norms_squared))):
         raise SingularBlockError(f"block {block} ({rows}x{cols}) is singular", block=block)
-    return np.linalg.inv(M)
+    return lapack.inverse(M)
 
 
 def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
@@ -63,13 +64,14 @@ def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
     rows, cols = J.shape
     if rows == cols and rows > 0:
         try:
-            rates = np.linalg.solve(J, twist)
+            rates = lapack.solve(J, twist)
         except np.linalg.LinAlgError:
             rates = None
         if rates is not None:
             flat = J.ravel()
-            growth = float(flat @ flat) * float(rates @ rates) * EXACT_RCOND**2
-            if growth <= float(twist @ twist):  # also False for NaN/inf rates
+            # ndarray.dot: the same BLAS dot as @ on vectors, without matmul's dispatch.
+            growth = float(flat.dot(flat)) * float(rates.dot(rates)) * EXACT_RCOND**2
+            if growth <= float(twist.dot(twist)):  # also False for NaN/inf rates
                 return rates
     return np.linalg.pinv(J, rcond=PINV_RCOND) @ twist if J.size else np.zeros(cols)
 
@@ -207,7 +209,7 @@ def dls(J: np.ndarray, twist: np.ndarray, damping: float = DLS_DAMPING) -> np.nd
     rows = J.shape[0]
     if J.size == 0:
         return np.zeros(J.shape[1])
-    return J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(rows), twist)
+    return J.T @ lapack.solve(J @ J.T + damping**2 * np.eye(rows), twist)
 
 
 def damped(M: np.ndarray, block: str) -> np.ndarray:

@@ -47,11 +47,12 @@ class PositionLimits:
         q_values, rate_values, dt = q.tolist(), rates.tolist(), self.dt
         passing = []
         for limit in self.limits:
-            rate = rate_values[limit.velocity]
-            value = q_values[limit.q_index] + rate * dt
+            _, q_index, velocity, lower, upper = limit  # unpacked: a NamedTuple's fields are slower
+            rate = rate_values[velocity]
+            value = q_values[q_index] + rate * dt
             # Moving outward past a bound: a joint already outside (a controller without
             # position limits) and standing still passes nothing.
-            if ((value > limit.upper and rate > 0.0) or (value < limit.lower and rate < 0.0)) and limit not in skipped:
+            if ((value > upper and rate > 0.0) or (value < lower and rate < 0.0)) and limit not in skipped:
                 passing.append(limit)
         return passing
 
@@ -62,16 +63,20 @@ class PositionLimits:
         if not self.enabled:
             return
         q_values = q.tolist()
+        for _, q_index, _, lower, upper in self.limits:
+            if not lower <= q_values[q_index] <= upper:
+                break
+        else:
+            return  # inside: the common case, no words made
         outside = [
             f"{limit.joint} at {q_values[limit.q_index]:.6g} (limits [{limit.lower:.6g}, {limit.upper:.6g}])"
             for limit in self.limits
             if not limit.lower <= q_values[limit.q_index] <= limit.upper
         ]
-        if outside:
-            raise InputError(
-                f"q is outside the position limits: {'; '.join(outside)}. Start inside them (robot.home() is), "
-                "or bring the joint back with a controller built with position_limits=False"
-            )
+        raise InputError(
+            f"q is outside the position limits: {'; '.join(outside)}. Start inside them (robot.home() is), "
+            "or bring the joint back with a controller built with position_limits=False"
+        )
 
     def hold(
         self,
@@ -125,12 +130,14 @@ class PositionLimits:
         already brings a joint onto its limit at most); describe the first joint that was past
         one ('' if none). The compiled core clamps with the same operations."""
         hit = ""
+        next_values = next_q.tolist()  # the test on Python floats; the rare clamp writes the arrays
         for limit in self.limits:
-            value = next_q[limit.q_index]
-            if value < limit.lower or value > limit.upper:
-                bound = limit.lower if value < limit.lower else limit.upper
-                next_q[limit.q_index] = bound
-                rates[limit.velocity] = (bound - q[limit.q_index]) / self.dt
+            _, q_index, velocity, lower, upper = limit
+            value = next_values[q_index]
+            if value < lower or value > upper:
+                bound = lower if value < lower else upper
+                next_q[q_index] = bound
+                rates[velocity] = (bound - q[q_index]) / self.dt
                 hit = hit or reached_detail(limit, bound)
         return hit
 
