@@ -15,7 +15,6 @@ from ..errors import SingularBlockError
 from ..kinematics.axes import joint_unit, joint_value
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition, PartitionIndex
-from ..solvers import lapack
 from ..solvers.conditioning import inverse_condition_bound
 from ..solvers.rates import partition_rates
 from ..solvers.registry import REGISTRY
@@ -92,7 +91,7 @@ class StepContext:
                     return 0.0
                 scaled = self.reduced(observation.jacobian) * self.row_scale_column
                 try:
-                    bound = min(bound, inverse_condition_bound(scaled, lapack.inverse(scaled)))
+                    bound = min(bound, inverse_condition_bound(scaled, np.linalg.inv(scaled)))
                 except np.linalg.LinAlgError:
                     return 0.0
                 continue

@@ -20,7 +20,6 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import SingularBlockError
-from . import lapack
 from .singular import PINV_RCOND, invertible
 
 EXACT_RCOND = 1e-10
@@ -50,7 +49,7 @@ def inverse(M: np.ndarray, block: str) -> np.ndarray:
     column_norms_squared = np.einsum("ij,ij->j", M, M)
     if not invertible(float(np.linalg.det(M)), float(np.prod(column_norms_squared))):
         raise SingularBlockError(f"block {block} ({rows}x{cols}) is singular", block=block)
-    return lapack.inverse(M)
+    return np.linalg.inv(M)
 
 
 def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
@@ -64,7 +63,7 @@ def exact(J: np.ndarray, twist: np.ndarray) -> np.ndarray:
     rows, cols = J.shape
     if rows == cols and rows > 0:
         try:
-            rates = lapack.solve(J, twist)
+            rates = np.linalg.solve(J, twist)
         except np.linalg.LinAlgError:
             rates = None
         if rates is not None:
@@ -209,7 +208,7 @@ def dls(J: np.ndarray, twist: np.ndarray, damping: float = DLS_DAMPING) -> np.nd
     rows = J.shape[0]
     if J.size == 0:
         return np.zeros(J.shape[1])
-    return J.T @ lapack.solve(J @ J.T + damping**2 * np.eye(rows), twist)
+    return J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(rows), twist)
 
 
 def damped(M: np.ndarray, block: str) -> np.ndarray:
