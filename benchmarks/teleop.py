@@ -7,7 +7,9 @@ Debian's Chromium at /usr/bin/chromium and Playwright, as the browser tests).
 1. **Baseline, same process, same run**: a bare loop that sleeps to the same absolute
    deadlines and does nothing else, so the ratio shows what the controller, the web thread
    and the render thread cost on top of Python's own sleep.
-2. **Console**, twice: ``TeleopServer(Teleop(ur5, dt=1/rate))`` with one headless Chromium
+2. **Console without a page**, twice (normal, then real-time scheduling): the same server, its
+   hand driven from Python (+x, -x, 250 ms each) with no browser attached.
+3. **Console**, twice: ``TeleopServer(Teleop(ur5, dt=1/rate))`` with one headless Chromium
    page attached, first with the control thread under normal scheduling, then asking for
    real-time (``SCHED_FIFO``, :func:`pinrate.teleop.pacing.request_realtime`; the row says
    what the OS granted); every loop period (wake-up to wake-up) is kept. The page is driven
@@ -15,7 +17,7 @@ Debian's Chromium at /usr/bin/chromium and Playwright, as the browser tests).
    while the run is recorded; each press's latency is measured in the page from ``keydown``
    to the animation frame after the first frame of poses that the moved robot produced
    (``window.pinrate.latencies``).
-3. **Saving**: the periods from "stop recording" until both files (.npz, .html) are written.
+4. **Saving**: the periods from "stop recording" until both files (.npz, .html) are written.
 
 Targets (issue 12): >= 990 Hz sustained, p99 period <= 2 ms, key to paint <= 30 ms median.
 """
@@ -109,6 +111,23 @@ def drive(
     }
 
 
+def without_page(rate: float, seconds: float, priority: int | None) -> dict[str, object]:
+    """The same console with no page attached, its hand driven from Python (+x then -x, 250 ms
+    each, as the key presses): what the controller and the loop cost without a browser."""
+    robot = pinrate.load("ur5")
+    teleop = pinrate.Teleop(robot, dt=1.0 / rate, timeout=1.0)
+    with TeleopServer(teleop, realtime_priority=priority) as server:
+        server.stats.periods.clear()
+        started = time.monotonic()
+        sign = 1.0
+        while time.monotonic() - started < seconds:
+            teleop.command([sign, 0.0, 0.0], [0.0, 0.0, 0.0])
+            time.sleep(0.25)
+            sign = -sign
+        periods = server.stats.recent(float("inf"))
+    return {"periods": periods, "scheduling": server.scheduling}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rate", type=float, default=1000.0, help="control loop target (Hz)")
@@ -127,6 +146,10 @@ def main(argv: list[str] | None = None) -> int:
     thread.start()
     thread.join()
     baseline = holder[0]
+    alone = {
+        label: without_page(args.rate, min(args.seconds, 10.0), priority)
+        for label, priority in (("normal", None), ("real-time", args.realtime_priority))
+    }
     runs = {}
     with tempfile.TemporaryDirectory() as folder:
         for label, priority in (("normal", None), ("real-time", args.realtime_priority)):
@@ -140,6 +163,14 @@ def main(argv: list[str] | None = None) -> int:
         f"{base_p99:.3f} | 1.00 | {baseline.max() * 1e3:.1f} |"
     )
     rows = [timing.row_of("bare loop period", baseline.tolist())]
+    for label, run in alone.items():
+        periods = run["periods"]
+        rate, median, p99 = summary(periods)
+        print(
+            f"| console, no page, driven from Python: {run['scheduling']} | {rate:.1f} | {median:.3f} | {p99:.3f} | "
+            f"{p99 / base_p99:.2f} | {periods.max() * 1e3:.1f} |"
+        )
+        rows.append(timing.row_of(f"console loop period, {label}, no page", periods.tolist()))
     for label, run in runs.items():
         for part, name in (("periods", "driven"), ("saving", "saving a recording")):
             periods = run[part]
