@@ -19,7 +19,9 @@ pytestmark = needs_core
 def core_map(robot: pinrate.Robot) -> CoreServo:
     index = pinrate.Partition.auto(robot).resolve(robot)
     with path("compiled"):
-        core = rho_map(robot, tuple(index.rows.tolist()), tuple(index.columns.tolist()), index.m, index.arm_columns.size)
+        core = rho_map(
+            robot, tuple(index.rows.tolist()), tuple(index.columns.tolist()), index.m, int(index.arm_columns.size)
+        )
     assert core is not None, f"{robot.name}: the core maps no rho"
     return core
 
