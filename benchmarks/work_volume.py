@@ -36,7 +36,9 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=100_000)
     parser.add_argument("--naive-samples", type=int, default=5_000)
     parser.add_argument("--repeats", type=int, default=7, help="interleaved rounds")
-    parser.add_argument("--workers", type=int, default=0, help="also time N worker processes (0: skip)")
+    parser.add_argument(
+        "--workers", type=int, default=0, help="also time N workers: core threads, else processes (0: skip)"
+    )
     timing.add_arguments(parser)
     args = parser.parse_args()
 
@@ -64,7 +66,7 @@ def main() -> None:
     if compiled:
         methods["sample_convergence, compiled (one C++ loop)"] = (timing.on("compiled", sample), args.samples)
     if args.workers > 1:
-        methods[f"sample_convergence, {args.workers} processes"] = (
+        methods[f"sample_convergence, {args.workers} workers (core threads)"] = (
             lambda: pinrate.sample_convergence(robot, args.samples, rng=0, workers=args.workers),
             args.samples,
         )

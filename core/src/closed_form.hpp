@@ -141,6 +141,11 @@ inline Block matmul(const Block &X, const Block &Y) {
   Block Z;
   Z.rows = X.rows;
   Z.cols = Y.cols;
+  if (X.rows == 3 && X.cols == 3 && Y.cols == 3) {  // a 6-DOF arm's: unrolled, the same sums in the same order
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) Z.v[3 * r + c] = X.v[3 * r] * Y.v[c] + X.v[3 * r + 1] * Y.v[3 + c] + X.v[3 * r + 2] * Y.v[6 + c];
+    return Z;
+  }
   for (int r = 0; r < X.rows; ++r)
     for (int c = 0; c < Y.cols; ++c) Z(r, c) = dot(&X.v[3 * r], &Y.v[c], X.cols, 1, 3);
   return Z;
@@ -235,12 +240,16 @@ inline double spectral_radius_3(const Block &M) {
   const double radius = 2.0 * std::sqrt(-p * (1.0 / 3.0));
   const double angle = std::acos(py_max(-1.0, py_min(1.0, 3.0 * q / (p * radius)))) * (1.0 / 3.0);
   const double two_pi_thirds = 2.0 * M_PI / 3.0;
-  double largest = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    const double root = std::fabs(radius * std::cos(angle - k * two_pi_thirds) + shift);
-    largest = k == 0 ? root : py_max(largest, root);
-  }
-  return largest;
+  const double first = std::fabs(radius * std::cos(angle - 0 * two_pi_thirds) + shift);
+  const double last = std::fabs(radius * std::cos(angle - 2 * two_pi_thirds) + shift);
+  // The middle root's cosine (argument in [-2 pi / 3, -pi / 3], to rounding) is at most 1/2
+  // in size, so that root is at most 0.5 radius + |shift| (the factor covers the roundings).
+  // Where the first or the last root is larger, the middle one cannot be the maximum and
+  // Python's max(first, middle, last) is max(first, last): one cosine saved, the same double.
+  const double ceiling = (0.5 * radius + std::fabs(shift)) * (1.0 + 1e-9);
+  if (first > ceiling || last > ceiling) return py_max(first, last);
+  const double middle = std::fabs(radius * std::cos(angle - 1 * two_pi_thirds) + shift);
+  return py_max(py_max(first, middle), last);
 }
 
 // closed_form.spectral_radius: rho of the smaller of G = U A^-1 B W^-1 and H (eq. 32, 50).

@@ -5,7 +5,8 @@
 // Servo(kinematics, settings)        a controller's twin; run(...) runs the servo loop,
 //                                    step_at(...) takes one Controller.step from q, step_given(...)
 //                                    one from the caller's J
-// spectral_radius_at(kin, ..., qs)   rho at each configuration (sample_convergence)
+// spectral_radius_at(qs, radii, threads)  rho at each configuration (sample_convergence), on threads
+// jacobian_timing(qs, threads)       the map's Jacobians alone, timed (its bound; benchmarks)
 // solve_timing(...)                  one algorithm's solve alone, repeated (benchmarks)
 //
 // and the constants of boundary.hpp (KERNELS, SINGULAR_RATIO, ...), which pinrate.compiled
@@ -23,10 +24,14 @@
 #define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
 #include <numpy/arrayobject.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <exception>
+#include <mutex>
 #include <set>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -373,23 +378,87 @@ nb::object step_given(Servo &servo, nb::handle q_object, nb::handle jacobian_obj
   return taken_step(servo, taken, std::move(twist_array), nb::none());
 }
 
-// rho at each configuration (N, nq); the servo's settings give the partition. The map runs
-// on a twin of the robot's kinematics (its own Data): threads sharing a Robot (a Dask worker's)
-// may map at once.
-void spectral_radius_at(Servo &servo, Array<const double> configurations,
-                        Array<double> radii) {
-  Kinematics kinematics = servo.kinematics().fresh();
-  const Servo mapper(kinematics, servo.settings());
-  const std::size_t count = configurations.shape(0), nq = static_cast<std::size_t>(kinematics.nq());
-  if (configurations.ndim() != 2 || configurations.shape(1) != nq || radii.size() != count)
-    throw std::invalid_argument("configurations must be (N, nq) and radii (N,)");
+// --- the rho map (sample_convergence) and its bound ---------------------------------------
+// Kept apart from the servo's bindings above: only this block and NB_MODULE's two lines for it
+// belong to the map.
+
+// work(kinematics, mapper, begin, end) over `threads` contiguous chunks of [0, count), each on
+// a thread of its own with a twin of the servo's kinematics (its own Data and J; the model,
+// read-only, copied), so threads sharing a Robot (a Dask worker's) may map at once too. The
+// split changes only which thread takes a configuration, never the operations made on it.
+// Runs without the GIL; the caller's thread takes the first chunk.
+template <typename Work>
+void over_chunks(const Servo &servo, std::size_t count, long threads, const Work &work) {
+  const std::size_t used = static_cast<std::size_t>(std::max(1L, std::min(threads, static_cast<long>(count))));
+  std::vector<std::exception_ptr> errors(used);
+  const auto chunk = [&](std::size_t t) {
+    try {
+      Kinematics kinematics = servo.kinematics().fresh();
+      const Servo mapper(kinematics, servo.settings());
+      work(kinematics, mapper, count * t / used, count * (t + 1) / used);
+    } catch (...) {
+      errors[t] = std::current_exception();
+    }
+  };
+  nb::gil_scoped_release release;
+  std::vector<std::thread> pool;
+  pool.reserve(used - 1);
+  for (std::size_t t = 1; t < used; ++t) pool.emplace_back(chunk, t);
+  chunk(0);
+  for (std::thread &thread : pool) thread.join();
+  for (const std::exception_ptr &error : errors)
+    if (error) std::rethrow_exception(error);
+}
+
+std::size_t checked_count(const Servo &servo, const Array<const double> &configurations, long threads) {
+  const std::size_t nq = static_cast<std::size_t>(servo.kinematics().nq());
+  if (configurations.ndim() != 2 || configurations.shape(1) != nq)
+    throw std::invalid_argument("configurations must be (N, nq)");
+  if (threads < 1) throw std::invalid_argument("threads must be at least 1");
+  return configurations.shape(0);
+}
+
+// rho at each configuration (N, nq) into radii (N,), over `threads` threads; the servo's
+// settings give the partition. Per q: J (the map's kinematics pass), the blocks straight from
+// it, the closed forms; nothing allocated on the closed-form path.
+void spectral_radius_at(Servo &servo, Array<const double> configurations, Array<double> radii, long threads) {
+  const std::size_t count = checked_count(servo, configurations, threads);
+  if (radii.size() != count) throw std::invalid_argument("radii must be (N,)");
   const double *source = configurations.data();
   double *out = radii.data();
-  nb::gil_scoped_release release;
-  for (std::size_t i = 0; i < count; ++i) {
-    kinematics.compute_jacobian(Eigen::Map<const Vector>(source + i * nq, nq));
-    out[i] = mapper.radius_here();
-  }
+  const int nq = servo.kinematics().nq();
+  over_chunks(servo, count, threads,
+              [&](Kinematics &kinematics, const Servo &mapper, std::size_t begin, std::size_t end) {
+                for (std::size_t i = begin; i < end; ++i) {
+                  kinematics.compute_jacobian(Eigen::Map<const Vector>(source + i * nq, nq));
+                  out[i] = mapper.radius_here();
+                }
+              });
+}
+
+// Seconds (wall clock) for the map's Jacobians alone at each configuration (N, nq) over
+// `threads` threads, split as spectral_radius_at splits them: the bound a rho map cannot beat
+// (benchmarks/region_map.py), the twins' set-up included as it is in the map.
+double jacobian_timing(Servo &servo, Array<const double> configurations, long threads) {
+  const std::size_t count = checked_count(servo, configurations, threads);
+  const double *source = configurations.data();
+  const int nq = servo.kinematics().nq();
+  double sinks = 0.0;
+  std::mutex guard;
+  const auto start = std::chrono::steady_clock::now();
+  over_chunks(servo, count, threads, [&](Kinematics &kinematics, const Servo &, std::size_t begin, std::size_t end) {
+    double sink = 0.0;  // one element of each J, so no J goes unused
+    for (std::size_t i = begin; i < end; ++i) {
+      kinematics.compute_jacobian(Eigen::Map<const Vector>(source + i * nq, nq));
+      sink = sink + kinematics.jacobian(0, 0);
+    }
+    const std::lock_guard<std::mutex> lock(guard);
+    sinks = sinks + sink;
+  });
+  const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
+  volatile double kept = sinks;
+  static_cast<void>(kept);
+  return elapsed.count();
 }
 
 // Seconds per call of one block algorithm's solve on the current J (kernel names as above):
@@ -436,7 +505,7 @@ NB_MODULE(pinrate_core, module) {
   // pinrate keeps a Kinematics per Robot until exit; that is no leak worth a warning.
   nb::set_leak_warnings(false);
   module.attr("PINOCCHIO_VERSION") = PINOCCHIO_VERSION;
-  module.attr("ABI") = 5;  // bumped when pinrate.compiled must change with it
+  module.attr("ABI") = 6;  // bumped when pinrate.compiled must change with it
 
   // boundary.hpp's constants, which pinrate.compiled.boundary checks at load.
   module.attr("SINGULAR_RATIO") = kSingularRatio;
@@ -501,6 +570,7 @@ NB_MODULE(pinrate_core, module) {
       // .none(): any object reaches the step (None included), which reads what it can.
       .def("step_at", &step_at, "q"_a.none(), "twist"_a.none(), "target"_a.none(), "gain"_a)
       .def("step_given", &step_given, "q"_a.none(), "jacobian"_a.none(), "twist"_a.none())
-      .def("spectral_radius_at", &spectral_radius_at)
+      .def("spectral_radius_at", &spectral_radius_at, "configurations"_a, "radii"_a, "threads"_a = 1)
+      .def("jacobian_timing", &jacobian_timing, "configurations"_a, "threads"_a = 1)
       .def("solve_timing", &solve_timing);
 }

@@ -67,8 +67,13 @@ def region_map(
     points: int = 121,
     partition: Partition | None = None,
     base: np.ndarray | None = None,
+    workers: int = 1,
 ) -> RegionMap:
-    """ρ over a ``points`` x ``points`` grid of two joints (default: the two ρ varies most with)."""
+    """ρ over a ``points`` x ``points`` grid of two joints (default: the two ρ varies most with).
+
+    ``workers``: threads of the compiled core, else processes (as in
+    :func:`pinrate.theorem.spectral_radius_at`); the map does not depend on it.
+    """
     partition = partition_for(robot, partition)
     points = check_count(points, "points", minimum=2, maximum=MAX_GRID_POINTS)
     pair = tuple(joints) if joints is not None else default_map_joints(robot, partition=partition)
@@ -88,7 +93,8 @@ def region_map(
     grid_x, grid_y = np.meshgrid(x, y)
     robot.set_joint_values(configurations, pair[0], grid_x.ravel())
     robot.set_joint_values(configurations, pair[1], grid_y.ravel())
-    radii = spectral_radius_at(robot, configurations, partition=partition).reshape(points, points)
+    radii = spectral_radius_at(robot, configurations, partition=partition, workers=workers)
+    radii = radii.reshape(points, points)
     return RegionMap(joints=pair, x=x, y=y, spectral_radius=radii, base=base)
 
 

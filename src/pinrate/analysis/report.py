@@ -213,7 +213,9 @@ def analyze(
         robot, samples, partition=partition, rng=rng, workers=workers, scheduler=scheduler, progress=progress
     )
     region = (
-        region_map(robot, joints=map_joints, points=points, partition=partition) if len(partition.joints) >= 2 else None
+        region_map(robot, joints=map_joints, points=points, partition=partition, workers=workers)
+        if len(partition.joints) >= 2
+        else None
     )
     shown = min(tcp_samples, sample.q.shape[0])
     return Report(

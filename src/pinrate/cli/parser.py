@@ -107,7 +107,9 @@ def _analyze(analyze: argparse.ArgumentParser) -> None:
     analyze.add_argument("--points", type=count(2), default=121, help="region map grid points per joint (>= 2)")
     analyze.add_argument("--sweep", metavar="PARAM=LO:HI", help="sweep a parameter of a papers' robot")
     analyze.add_argument("--out", default="analysis", help="folder for report.md and the PNGs")
-    analyze.add_argument("--workers", type=count(1), default=1, help="processes on this machine")
+    analyze.add_argument(
+        "--workers", type=count(1), default=1, help="threads of the compiled core (else processes) on this machine"
+    )
     analyze.add_argument("--scheduler", help="a Dask scheduler address (needs pinrate[dask])")
     analyze.add_argument("--seed", type=count(0), default=0, help="seed of the samples (>= 0)")
 

@@ -25,7 +25,7 @@ CHOICES = ("auto", "python", "compiled")
 CORE_MODULE = "pinrate_core"
 """The extension module's name."""
 
-CORE_ABI = 5
+CORE_ABI = 6
 """The ``pinrate_core.ABI`` this pinrate speaks; a core of another ABI is not used, nor one
 whose constants or settings' fields differ from this pinrate's (:mod:`.boundary`)."""
 

@@ -72,11 +72,20 @@ class CoreServo:
         ``run_servo``): (outcome, step number, best, progress, progress step)."""
         return self._servo.run(**arguments)
 
-    def spectral_radius_at(self, configurations: np.ndarray) -> np.ndarray:
-        """ρ of the smaller of G and H at each configuration (N, nq); inf where A or W is singular."""
+    def spectral_radius_at(self, configurations: np.ndarray, *, threads: int = 1) -> np.ndarray:
+        """ρ of the smaller of G and H at each configuration (N, nq); inf where A or W is singular.
+
+        ``threads``: the configurations split into that many contiguous chunks, each mapped on
+        a thread of the core's own (the GIL released); the result does not depend on it.
+        """
         radii = np.empty(configurations.shape[0])
-        self._servo.spectral_radius_at(np.ascontiguousarray(configurations, dtype=float), radii)
+        self._servo.spectral_radius_at(np.ascontiguousarray(configurations, dtype=float), radii, threads)
         return radii
+
+    def jacobian_seconds(self, configurations: np.ndarray, *, threads: int = 1) -> float:
+        """Wall-clock seconds of the ρ map's Jacobians alone at each configuration (N, nq),
+        split over ``threads`` as :meth:`spectral_radius_at` splits them: the map's bound."""
+        return self._servo.jacobian_timing(np.ascontiguousarray(configurations, dtype=float), threads)
 
     def solve_seconds(self, q: np.ndarray, twist: np.ndarray, algorithm: str, repeats: int) -> float:
         """Seconds per call of ``algorithm``'s solve alone (exact, mca1 or mca2) at q, in C++."""

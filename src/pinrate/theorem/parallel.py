@@ -35,8 +35,9 @@ def _progress(total: int, description: str, enabled: bool | None) -> Any:
     )
 
 
-def _check_workers(workers: object) -> int:
-    """Worker processes to use: a positive integer, at most the CPU count."""
+def check_workers(workers: object) -> int:
+    """Workers to use (processes, or the compiled core's threads): a positive integer, at
+    most the CPU count."""
     count = check_count(workers, "workers", minimum=1)
     return min(count, os.cpu_count() or 1) if count > 1 else 1
 
@@ -60,7 +61,7 @@ def map_chunks(
             precedence over ``workers``. Needs the optional ``dask`` extra.
         progress: show a progress bar (None: only on a terminal).
     """
-    workers = _check_workers(workers)
+    workers = check_workers(workers)
     results: list[Any] = [None] * len(chunks)
     with _progress(len(chunks), description, progress) as bar:
         if scheduler is not None:

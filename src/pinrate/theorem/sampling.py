@@ -2,7 +2,8 @@
 
 Jacobians come from Pinocchio one configuration at a time; the block algebra and the
 eigenvalues run batched in closed form (:mod:`pinrate.solvers.batched`), in chunks that
-can go to worker processes or a Dask cluster (:mod:`.parallel`).
+can go to worker processes or a Dask cluster (:mod:`.parallel`). The compiled core, where
+installed, runs Jacobians and closed forms in one C++ loop, on threads of its own.
 """
 
 from __future__ import annotations
@@ -14,13 +15,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..checks import MAX_SAMPLES, RngLike, check_count
-from ..compiled import rho_map
+from ..compiled import CoreServo, rho_map
 from ..errors import InputError
 from ..kinematics.manipulator import Robot, RobotSpec
 from ..kinematics.partition import Partition, partition_for
 from ..kinematics.urdf import robot_from_spec
 from ..solvers import batched
-from .parallel import map_chunks
+from .parallel import check_workers, map_chunks
 
 _Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 
@@ -76,7 +77,11 @@ def _partition_jacobians(robot: Robot, configurations: np.ndarray, partition: Pa
 
 
 CHUNK = 20_000
-"""Configurations per chunk of work in :func:`sample_convergence`."""
+"""Configurations per chunk of work in :func:`sample_convergence` on the Python path."""
+
+CORE_CHUNK = 250_000
+"""Configurations per call of the compiled ρ map (a few tenths of a second each): the
+progress bar moves and Ctrl-C is heard between calls."""
 
 
 def _spectral_radius_of_chunk(spec: RobotSpec, partition: Partition, configurations: np.ndarray) -> np.ndarray:
@@ -84,16 +89,27 @@ def _spectral_radius_of_chunk(spec: RobotSpec, partition: Partition, configurati
     return _spectral_radius(robot_from_spec(spec), partition, configurations)
 
 
+def _core_map(robot: Robot, partition: Partition) -> CoreServo | None:
+    """The compiled ρ map of ``robot`` and ``partition``, or None where the Python path runs."""
+    index = partition.resolve(robot)
+    return rho_map(
+        robot, tuple(index.rows.tolist()), tuple(index.columns.tolist()), index.m, int(index.arm_columns.size)
+    )
+
+
+def _core_chunk(core: CoreServo, threads: int, configurations: np.ndarray) -> np.ndarray:
+    """ρ at each configuration of one chunk (N, nq) on the compiled map's ``threads``."""
+    return core.spectral_radius_at(configurations, threads=threads)
+
+
 def _spectral_radius(robot: Robot, partition: Partition, configurations: np.ndarray) -> np.ndarray:
     """ρ at each configuration (N, nq) of ``robot``: in the compiled core where it covers the
     robot and partition (Jacobians and closed forms in one C++ loop), else Pinocchio
     Jacobians and the batched block algebra."""
-    index = partition.resolve(robot)
-    core = rho_map(
-        robot, tuple(index.rows.tolist()), tuple(index.columns.tolist()), index.m, int(index.arm_columns.size)
-    )
+    core = _core_map(robot, partition)
     if core is not None:
         return core.spectral_radius_at(configurations)
+    index = partition.resolve(robot)
     jacobians = _partition_jacobians(robot, configurations, partition)
     m, n_arm = index.m, index.arm_columns.size
     return batched.spectral_radius(
@@ -110,10 +126,33 @@ def spectral_radius_at(
     scheduler: object = None,
     progress: bool | None = None,
 ) -> np.ndarray:
-    """ρ of the smaller of G and H at each configuration (N, nq), in chunks, in parallel if asked."""
+    """ρ of the smaller of G and H at each configuration (N, nq), in chunks, in parallel if asked.
+
+    ``workers``: threads inside the compiled core where it maps this robot and partition
+    (each with its own Pinocchio Data; the result is the same for any count), else worker
+    processes; ``scheduler``: a Dask cluster instead (:func:`.parallel.map_chunks`).
+    """
     partition = partition_for(robot, partition)
     partition.resolve(robot)  # unknown joints fail here, not in a worker
     configurations = robot.check_configurations(configurations)
+    workers = check_workers(workers)
+    core = _core_map(robot, partition) if scheduler is None else None
+    description = f"{robot.name}: rho"
+    if core is not None:
+        # Threads, not processes: a process rebuilds the robot and ships its chunk both ways,
+        # which costs about as much as the compiled map of the chunk itself.
+        if configurations.shape[0] <= CORE_CHUNK:
+            return core.spectral_radius_at(configurations, threads=workers)
+        starts = range(0, configurations.shape[0], CORE_CHUNK)
+        parts = map_chunks(
+            _core_chunk,
+            [configurations[start : start + CORE_CHUNK] for start in starts],
+            core,
+            workers,
+            progress=progress,
+            description=description,
+        )
+        return np.concatenate(parts)
     if workers == 1 and scheduler is None and configurations.shape[0] <= CHUNK:
         return _spectral_radius(robot, partition, configurations)
     chunks = [configurations[start : start + CHUNK] for start in range(0, configurations.shape[0], CHUNK)]
@@ -125,7 +164,7 @@ def spectral_radius_at(
         workers=workers,
         scheduler=scheduler,
         progress=progress,
-        description=f"{robot.name}: rho",
+        description=description,
     )
     return np.concatenate(parts) if parts else np.zeros(0)
 
@@ -144,9 +183,10 @@ def sample_convergence(
 
     Only the partition's joints are drawn (others stay at neutral; joints without limits in
     [-pi, pi]). Jacobians come from Pinocchio one configuration at a time; the block algebra
-    and the eigenvalues are batched in closed form (:mod:`pinrate.solvers.batched`). ``workers``
-    spreads the chunks over processes, ``scheduler`` over a Dask cluster (the result is
-    the same either way: configurations are drawn here first). ``progress``: a bar (None:
+    and the eigenvalues are batched in closed form (:mod:`pinrate.solvers.batched`); the
+    compiled core, where installed, runs both in one C++ loop. ``workers`` spreads the work
+    over that many threads inside the core (else over processes), ``scheduler`` over a Dask
+    cluster (the result is the same either way: configurations are drawn here first). ``progress``: a bar (None:
     on a terminal only).
     """
     samples = check_count(samples, "samples", minimum=1, maximum=MAX_SAMPLES)
