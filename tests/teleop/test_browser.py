@@ -9,6 +9,7 @@ screenshots into docs/.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import shutil
@@ -744,7 +745,9 @@ def test_closing_the_page_stops_the_motion_within_the_timeout(browser, console):
     closed = time.monotonic()
     still(server, seconds=0.1)
     assert time.monotonic() - closed < TIMEOUT + 0.5
-    assert server.clients == 0
+    # The web thread notes the closed socket on its own clock (late on a loaded machine); the
+    # motion's stop above is the claim, the count only has to follow.
+    wait_until(lambda: server.clients == 0, timeout=5.0)
 
 
 def test_one_page_controls_the_others_watch(browser, console, tmp_path):
@@ -818,26 +821,32 @@ def test_drawn_links_follow_the_robot(browser, console):
     page = open_console(browser, server)
     hold(page, "KeyS", 0.4)
     q = still(server)
-    page.wait_for_timeout(500)
     robot = server.robot
     geometry = robot.visual_model.geometryObjects[2]
     name = server.viewer._visualizer.getViewerNodeName(geometry, pin.GeometryType.VISUAL)
-    elements = page.evaluate(
-        """(path) => {
-            let node = window.viewer.scene_tree;
-            for (const part of path) node = node.children[part];
-            const root = window.viewer.scene_tree.children["meshcat"].object;
-            window.viewer.scene.updateMatrixWorld(true);
-            return root.matrixWorld.clone().invert().multiply(node.object.matrixWorld).elements;
-        }""",
-        ["meshcat", *name.split("/")],
-    )
-    drawn = np.array(elements).reshape(4, 4).T
+
+    def drawn_pose() -> np.ndarray:
+        elements = page.evaluate(
+            """(path) => {
+                let node = window.viewer.scene_tree;
+                for (const part of path) node = node.children[part];
+                const root = window.viewer.scene_tree.children["meshcat"].object;
+                window.viewer.scene.updateMatrixWorld(true);
+                return root.matrixWorld.clone().invert().multiply(node.object.matrixWorld).elements;
+            }""",
+            ["meshcat", *name.split("/")],
+        )
+        return np.array(elements).reshape(4, 4).T
+
     data, geometry_data = robot.model.createData(), robot.visual_model.createData()
     pin.forwardKinematics(robot.model, data, q)
     pin.updateGeometryPlacements(robot.model, data, robot.visual_model, geometry_data)
     expected = geometry_data.oMg[2].homogeneous @ np.diag([*geometry.meshScale, 1.0])
-    np.testing.assert_allclose(drawn, expected, atol=1e-5)  # float32 on the page
+    # The page draws the still robot's last frame when it arrives (late on a loaded machine):
+    # the claim is where the link is drawn, not how soon.
+    with contextlib.suppress(AssertionError):
+        wait_until(lambda: np.allclose(drawn_pose(), expected, rtol=0, atol=1e-5), timeout=10.0)
+    np.testing.assert_allclose(drawn_pose(), expected, atol=1e-5)  # float32 on the page
     page.close()
 
 
