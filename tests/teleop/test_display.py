@@ -29,6 +29,20 @@ def test_idle_moving_halted_and_reversing(ur5):
     assert describe(None).word == "idle"
 
 
+def test_the_dead_man_is_said_only_once_the_robot_is_still(ur5):
+    """The dead man stops the command at once, the robot at the next tick: a moving step
+    read after the stop still says "moving", and no dead man beside it."""
+    controller = Controller(ur5)
+    still = controller.step(ur5.home(), np.zeros(6))
+    moving = controller.step(ur5.home(), np.array([0.05, 0, 0, 0, 0, 0]))
+    said = describe(moving, dead_man="no input for 0.3 s")
+    assert (said.word, said.dead_man) == ("moving", "")
+    said = describe(still, dead_man="no input for 0.3 s")
+    assert (said.word, said.dead_man) == ("dead man: no input for 0.3 s", "no input for 0.3 s")
+    assert describe(None, dead_man="gone").dead_man == "gone"
+    assert describe(still, halted=True, dead_man="gone").dead_man == ""
+
+
 def test_a_joint_limit_names_the_joint(ur5):
     index = ur5.model.joints[ur5.joint_id("wrist_3_joint")].idx_q
     q = ur5.home()

@@ -47,12 +47,14 @@ COLOURS: dict[Status, str] = {
 
 @dataclass(frozen=True)
 class Said:
-    """A step's status as the console shows it."""
+    """A step's status as the console shows it; ``dead_man``: the dead man's reason when the
+    words are the dead man's, else "" (a frame never says "dead man" beside "moving")."""
 
     word: str
     colour: str
     detail: str
     conditions: tuple[str, ...]
+    dead_man: str = ""
 
 
 def describe(step: Step | None, *, halted: bool = False, reversing: bool = False, dead_man: str = "") -> Said:
@@ -65,7 +67,7 @@ def describe(step: Step | None, *, halted: bool = False, reversing: bool = False
         return Said("halted", RED, "the operator halted the robot: click resume to drive it", ())
     if dead_man and not reversing and (step is None or not step.joint_rates.any()):
         detail = "the robot stopped because the operator's input stopped; drive again to go on"
-        return Said(f"dead man: {dead_man}", BLACK, detail, ())
+        return Said(f"dead man: {dead_man}", BLACK, detail, (), dead_man)
     if step is None:
         return Said("idle", GREY, "", ())
     word, colour = step.status.word, COLOURS[step.status]

@@ -88,20 +88,21 @@ class Readout:
 
     def frame(self, *, poses: bool, mode: str, input_seq: int) -> dict[str, Any]:
         """One frame for the pages: the status (``status``, ``colour``, ``detail``,
-        ``conditions``; ``dead_man``: why the dead man stopped the robot, or None), the joints
-        (``q``: each joint's value in velocity order; ``configuration``: q itself), the tip's
-        pose in the world (``tip``: :meth:`tip`), the console's state (``halted``,
-        ``reversing``, ``recording``, ``frame``, ``mode``, the strategies, the loop's
-        rate), the last input applied (``input_seq``), the last step's numbers and, when
+        ``conditions``; ``dead_man``: why the dead man stopped the robot while the status
+        says so, or None), the joints (``q``: each joint's value in velocity order;
+        ``configuration``: q itself), the tip's pose in the world (``tip``: :meth:`tip`), the
+        console's state (``halted``, ``reversing``, ``recording``, ``frame``, ``mode``, the
+        strategies, the loop's rate), the last input applied (``input_seq``), the last step's numbers and, when
         ``poses``, every link's pose."""
         teleop = self.teleop
         q, step = teleop.q.copy(), teleop.last
-        dead_man = teleop.dead_man
-        said = describe(step, halted=teleop.halted, reversing=teleop.reversing, dead_man=dead_man)
+        # The dead man is set from another thread: the step read before it may still move,
+        # and then the frame says "moving" and no dead man until the still step is read.
+        said = describe(step, halted=teleop.halted, reversing=teleop.reversing, dead_man=teleop.dead_man)
         frame: dict[str, Any] = {
             "type": "frame",
             "input_seq": input_seq,
-            "dead_man": dead_man or None,
+            "dead_man": said.dead_man or None,
             "status": said.word,
             "colour": said.colour,
             "detail": said.detail,
