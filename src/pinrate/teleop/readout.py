@@ -92,8 +92,8 @@ class Readout:
         says so, or None), the joints (``q``: each joint's value in velocity order;
         ``configuration``: q itself), the tip's pose in the world (``tip``: :meth:`tip`), the
         console's state (``halted``, ``reversing``, ``recording``, ``frame``, ``mode``, the
-        strategies, the loop's rate), the last input applied (``input_seq``), the last step's numbers and, when
-        ``poses``, every link's pose."""
+        strategies, the loop's rate), the last input applied (``input_seq``), the last step's
+        numbers and, when ``poses``, every link's pose."""
         teleop = self.teleop
         q, step = teleop.q.copy(), teleop.last
         # The dead man is set from another thread: the step read before it may still move,
