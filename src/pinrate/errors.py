@@ -54,6 +54,12 @@ class SchedulerError(PinrateError):
     """A Dask scheduler could not be reached."""
 
 
+class PlantError(PinrateError):
+    """A simulated plant could not be built or run: what the robot's model lacks for the
+    simulator (an inertia, a joint kind), or the simulator is not installed; the message says
+    which and how to repair it."""
+
+
 class UnsupportedByCoreError(PinrateError):
     """The compiled core does not cover a robot or configuration; the message says why. The
     loops catch it and run on the Python path, which covers everything."""

@@ -35,6 +35,8 @@ norms ``tol`` applies to):
   step would have made a block singular; or the algorithm met a singular block).
 - **collision**: the step halted before two links would come within the collision monitor's
   stop distance (``Controller(collision=True)``).
+- **plant** (a run on a plant): the plant measured a joint past a position limit by more
+  than its ``limit_tolerance`` (:mod:`.measured`).
 - **max steps**: ``max_steps`` ran out. ``max_steps`` is at most MAX_STEPS (one million; an
   InputError names it beyond): the run records every step, so this bounds its memory.
 
@@ -53,6 +55,7 @@ from ..checks import check_count, check_positive
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
+from ..plants import Plant
 from .commands import PoseGoal
 from .controller import (
     CONTROLLER_OPTIONS,
@@ -121,6 +124,7 @@ def servo(
     singularity: str = "decelerate",
     wrist: str = "turn",
     controller: Controller | None = None,
+    plant: Plant | None = None,
     **controller_options: Any,
 ) -> Trajectory:
     """Servo the tip from q0 to ``target`` (4x4 pose in the world, or pinocchio.SE3).
@@ -140,13 +144,21 @@ def servo(
     ``robot`` is used as it is (then no controller option may be given here; its state, such
     as acceleration-limited rates, carries over from earlier steps). An unknown option is an
     InputError listing the valid ones.
+
+    ``plant`` (:mod:`pinrate.plants`, e.g. ``MujocoPlant(robot)``) closes the loop on a
+    simulated robot: it is reset to q0, each step is taken from the configuration it measured
+    after the step before (never the controller's own integration; Shoham & Koren Fig. 3),
+    and the trajectory's q are the measured ones, with what the plant did beside the commands
+    in ``trajectory.plant`` (measured rates, the tip's tracking error, saturated actuators).
+    Such a run steps on Python, each step per call (compiled per call where the core covers
+    the controller). None (the default): the kinematic loop, q the integrated rates.
     """
     if controller is None:
         unknown = sorted(set(controller_options) - set(CONTROLLER_OPTIONS))
         if unknown:
             raise InputError(
                 f"servo() has no option {', '.join(map(repr, unknown))}; its own are gain, max_steps, tol, "
-                f"stall_time, controller, and the Controller's: {', '.join(CONTROLLER_OPTIONS)}"
+                f"stall_time, controller, plant, and the Controller's: {', '.join(CONTROLLER_OPTIONS)}"
             )
         controller = Controller(
             robot,
@@ -182,6 +194,13 @@ def servo(
         check_positive(stall_time, "stall_time")
     stall_steps = math.ceil(min(stall_time / controller.dt, STALL_MAX_STEPS))
     run = ServoRun(controller, goal, q, tol, stall_steps, max_steps)
+    if plant is not None:
+        if not isinstance(plant, Plant):
+            raise InputError(f"plant must be a pinrate.plants.Plant, not {type(plant).__name__}")
+        if plant.robot is not robot:
+            raise InputError("the plant was built for another Robot object: servo it on that one")
+        run.on_plant(plant)
+        return run.trajectory()
     core = controller.compiled()
     if core is None:
         run.python()

@@ -11,12 +11,14 @@ from typing import Any
 import numpy as np
 
 from ..compiled import CoreServo
+from ..plants import Plant
 from .commands import PoseGoal
 from .controller import Controller, Observation, error_norms
 from .core_step import DETAILED, STATUSES, core_detail
+from .measured import onto_limits
 from .stall import stall_cause
 from .status import Status
-from .trajectory import Trajectory
+from .trajectory import PlantRecord, Trajectory
 
 DIVERGENCE_FACTOR = 3.0
 """Stop as diverging once position + orientation error exceeds this times its minimum so far."""
@@ -81,8 +83,10 @@ class ServoRun:
         self.best = math.inf
         self.progress, self.progress_step = math.inf, 0  # the error at the last 1 % improvement, and when
         self.final, self.reason = "", ""
+        self.plant: Plant | None = None
+        self.measured: list[tuple[np.ndarray, float, tuple[str, ...]]] = []  # per step: rates, tracking, saturated
 
-    # ------------------------------------------------------------------ the two paths
+    # ------------------------------------------------------------------ the paths
     def python(self) -> None:
         """The run on Python: observe, judge, step, until a stop rule ends it."""
         while True:
@@ -91,6 +95,14 @@ class ServoRun:
                 return
             if self._python_step(observation):
                 return
+
+    def on_plant(self, plant: Plant) -> None:
+        """The run in closed loop on ``plant`` (Shoham & Koren's Fig. 3): reset to q0, then
+        each step is taken from the configuration the plant measured after the one before
+        (:func:`~.measured.onto_limits`), and the plant is advanced by its rates for dt."""
+        self.plant = plant
+        self.log.q[0] = plant.reset(self.log.q[0]).q
+        self.python()
 
     def compiled(self, core: CoreServo) -> None:
         """The run in the compiled ``core``, Python taking each step the core hands back
@@ -125,7 +137,12 @@ class ServoRun:
     # ------------------------------------------------------------------ one step's parts
     def _record(self) -> tuple[Observation, float, float]:
         """This step's observation, logged; and its error norms (m, rad) as Python floats."""
-        observation = self.controller.observe_unchecked(self.log.q[self.step_number], self.goal)
+        view = self.log.q[self.step_number]
+        if self.plant is not None:  # the controller's view of the measurement (the record keeps it as measured)
+            view, beyond = onto_limits(self.controller, view, self.plant.limit_tolerance)
+            if beyond:
+                self.final, self.reason = "plant", f"plant: past a position limit: {beyond} at step {self.step_number}"
+        observation = self.controller.observe_unchecked(view, self.goal)
         position, orientation = error_norms(observation, self.m)
         self.log.position[self.step_number] = position
         self.log.orientation[self.step_number] = orientation
@@ -134,6 +151,8 @@ class ServoRun:
 
     def _judge(self, position: float, orientation: float) -> bool:
         """The stop rules at this step's error norms; True when the run ends here."""
+        if self.final:  # the plant left the limits (:meth:`_record`)
+            return True
         step_number = self.step_number
         total = position + orientation
         if position < self.tol and orientation < self.tol:
@@ -201,9 +220,21 @@ class ServoRun:
             return True
         self.steps[step_number] = (step.status.word, step.detail)
         self.log.rates[step_number] = step.joint_rates
-        self.log.q[step_number + 1] = step.q
+        self.log.q[step_number + 1] = (
+            step.q if self.plant is None else self._advance(self.plant, step.q, step.joint_rates)
+        )
         self.step_number = step_number + 1
         return False
+
+    def _advance(self, plant: Plant, commanded: np.ndarray, joint_rates: np.ndarray) -> np.ndarray:
+        """The plant advanced by ``joint_rates`` for dt; its measured q. Records the measured
+        rates, the tip's distance (m) from where the step's ``commanded`` q would put it,
+        and the saturated joints."""
+        measurement = plant.advance(joint_rates, self.controller.dt)
+        robot = self.controller.robot
+        tracking = float(np.linalg.norm(robot.pose(commanded)[:3, 3] - robot.pose(measurement.q)[:3, 3]))
+        self.measured.append((measurement.joint_rates, tracking, measurement.saturated))
+        return measurement.q
 
     # ------------------------------------------------------------------ the result
     def _words(self) -> tuple[list[str], list[str]]:
@@ -235,6 +266,18 @@ class ServoRun:
         status.append(self.final)
         details.append(self.reason)
         log, controller = self.log, self.controller
+        plant = None
+        if self.plant is not None:
+            names = controller.robot.joint_names
+            measured = self.measured[:taken]
+            plant = PlantRecord(
+                name=self.plant.name,
+                measured_rates=np.array([rates for rates, _, _ in measured]).reshape(taken, controller.robot.nv),
+                tracking_error=np.array([tracking for _, tracking, _ in measured], dtype=float),
+                saturated=np.array([[name in hit for name in names] for _, _, hit in measured], dtype=bool).reshape(
+                    taken, controller.robot.nv
+                ),
+            )
         return Trajectory(
             q=log.q[: taken + 1].copy(),
             position_error=log.position[: taken + 1].copy(),
@@ -248,6 +291,7 @@ class ServoRun:
             dt=controller.dt,
             partition=controller.partition,
             detail=details,
+            plant=plant,
         )
 
 

@@ -36,6 +36,31 @@ RENAMED_WORDS = {
 renamed, old to new; its other words are unchanged."""
 
 
+@dataclass(frozen=True)
+class PlantRecord:
+    """What the plant did beside what the controller commanded, step by step (a run on a
+    plant: ``servo(..., plant=...)``; :mod:`pinrate.plants`).
+
+    Attributes:
+        name: the plant, in words (``Plant.name``).
+        measured_rates: the joints' velocities the plant measured at the end of each step,
+            (N - 1, nv), rad/s or m/s; the commanded ones are ``Trajectory.joint_rates``.
+        tracking_error: per step, the distance (m) between the tip where the step's command
+            would have put it (q[i] integrated by joint_rates[i] over dt) and where the plant
+            measured it (at q[i + 1]), (N - 1,).
+        saturated: per step and joint, True when the joint's actuator reached its effort
+            limit during the step, (N - 1, nv).
+    """
+
+    name: str
+    measured_rates: np.ndarray
+    tracking_error: np.ndarray
+    saturated: np.ndarray
+
+
+_PLANT_FIELDS = ("plant", "measured_rates", "tracking_error", "saturated")
+
+
 @dataclass
 class Trajectory:
     """A servo run: value i of every per-configuration array is taken at ``q[i]``.
@@ -49,13 +74,16 @@ class Trajectory:
             (:attr:`Status.word <pinrate.Status.word>`: "moving", "speed limited", "at a joint
             limit", "rate limited", …, the words the console shows), and for the last the
             run's outcome ("converged", "diverging", "stalled", "singular", "collision", "max
-            steps"; see :mod:`pinrate.control.servo_loop`; "reversed" for a reversed run).
+            steps", "plant"; see :mod:`pinrate.control.servo_loop`; "reversed" for a
+            reversed run).
         joint_rates: the rates applied after each configuration but the last, (N - 1, nv).
         converged: both errors below tol at the last configuration.
         reason: why the run stopped, in words.
         detail: per configuration, what limited the step taken from it, in words (which
             joint, which block, what conditioning or distance; "" when nothing did); the last
             is ``reason``. Empty for trajectories saved before it existed.
+        plant: what the plant measured beside the commands (:class:`PlantRecord`), for a run
+            on a plant; None for a kinematic run (its q are the integrated rates).
     """
 
     q: np.ndarray
@@ -70,6 +98,7 @@ class Trajectory:
     dt: float
     partition: Partition = field(repr=False)
     detail: list[str] = field(default_factory=list, repr=False)
+    plant: PlantRecord | None = field(default=None, repr=False)
 
     @property
     def steps(self) -> int:
@@ -87,7 +116,8 @@ class Trajectory:
         gives ``q[i + 1]`` (exactly on every joint's own group: q exp(v) exp(-v) = q). Every
         configuration is one the run went through, so the reversal stays within every limit
         the run kept. Per-configuration arrays are reversed alike; ``converged`` is False and
-        ``reason`` says what was reversed."""
+        ``reason`` says what was reversed. A reversal is a plan, not a measurement: it has
+        no :attr:`plant` record."""
         return Trajectory(
             q=self.q[::-1].copy(),
             position_error=self.position_error[::-1].copy(),
@@ -130,6 +160,13 @@ class Trajectory:
             **arrays,
             **texts,
         }
+        if self.plant is not None:
+            entries.update(
+                plant=np.array(self.plant.name),
+                measured_rates=np.asarray(self.plant.measured_rates, dtype=float),
+                tracking_error=np.asarray(self.plant.tracking_error, dtype=float),
+                saturated=np.asarray(self.plant.saturated, dtype=bool),
+            )
         # To a stream: numpy would append ".npz" to a name.
         return replace_file(path, "trajectory file", lambda stream: np.savez(stream, **entries))
 
@@ -147,7 +184,10 @@ class Trajectory:
         (N,) text; detail (N,) text or empty (absent in ``-1``); converged a boolean; dt a
         positive finite number up to PHYSICAL_BOUND; reason, algorithm, linear, angular one
         text each; arm and wrist lists of joint names (non-empty, printable) that make a
-        :class:`~pinrate.kinematics.partition.Partition`. A field more or fewer is refused.
+        :class:`~pinrate.kinematics.partition.Partition`; a run on a plant adds its
+        :class:`PlantRecord` (``plant`` one text, ``measured_rates`` floats (N - 1, nv),
+        ``tracking_error`` floats >= 0 (N - 1,), ``saturated`` booleans (N - 1, nv): all four
+        or none). A field more or fewer is refused.
 
         Raises:
             InputError: naming the file (and the field): a missing file or one that is not
@@ -156,7 +196,7 @@ class Trajectory:
         """
         with open_npz(path, "trajectory file", max_bytes=max_bytes) as npz:
             version = _version(npz)
-            npz.fields((*_FIELDS, "detail") if version == FORMAT else _FIELDS, ("detail",))
+            npz.fields((*_FIELDS, "detail") if version == FORMAT else _FIELDS, ("detail", *_PLANT_FIELDS))
             rows, nq = npz.shape("q", NUMBERS, 2)
             if rows < 1 or nq < 1:
                 raise npz.refuse(f"has shape {(rows, nq)}: a trajectory holds its start at least", "q")
@@ -189,6 +229,7 @@ class Trajectory:
                 partition = Partition(arm, wrist, linear=texts["linear"], angular=texts["angular"])
             except PinrateError as error:
                 raise npz.refuse(f"holds no partition in 'arm', 'wrist', 'linear', 'angular': {error}") from None
+            plant = _plant_record(npz, arrays["joint_rates"].shape)
         return cls(
             status=status,
             converged=converged,
@@ -197,8 +238,33 @@ class Trajectory:
             dt=dt,
             partition=partition,
             detail=detail,
+            plant=plant,
             **arrays,
         )
+
+
+def _plant_record(npz: Npz, shape: tuple[int, ...]) -> PlantRecord | None:
+    """The file's :class:`PlantRecord` (its four fields, or none of them), checked against
+    the joint rates' ``shape`` (N - 1, nv)."""
+    present = [name for name in _PLANT_FIELDS if name in npz.members]
+    if not present:
+        return None
+    if len(present) < len(_PLANT_FIELDS):
+        missing = [name for name in _PLANT_FIELDS if name not in npz.members]
+        raise npz.refuse(f"holds {', '.join(present)} without {', '.join(missing)}: a plant record has all four")
+    measured = npz.floats("measured_rates", 2)
+    tracking = npz.floats("tracking_error", 1)
+    for name, values, wanted in (("measured_rates", measured, shape), ("tracking_error", tracking, shape[:1])):
+        if values.shape != wanted:
+            raise npz.refuse(f"has shape {values.shape}, not {wanted} as the joint rates'", name)
+    if (tracking < 0).any():
+        raise npz.refuse(f"holds a negative value at {int(np.argmax(tracking < 0))}", "tracking_error")
+    if npz.shape("saturated", "b", 2) != shape:
+        raise npz.refuse(f"has shape {npz.members['saturated'].shape}, not {shape} as the joint rates'", "saturated")
+    saturated = npz.array("saturated")
+    if not np.isin(saturated.view(np.uint8), (0, 1)).all():
+        raise npz.refuse("holds a byte that is not a boolean", "saturated")
+    return PlantRecord(npz.text("plant"), measured, tracking, saturated.astype(bool))
 
 
 _FIELDS = ("format", *_ARRAYS, *_TEXTS, "status", "arm", "wrist", "converged", "dt")

@@ -1,0 +1,297 @@
+"""A MuJoCo model of a pinrate :class:`~pinrate.kinematics.manipulator.Robot`, built from
+its Pinocchio model (the one the controller uses, so the two cannot disagree on a joint, an
+axis or a frame).
+
+Each moving joint of the Pinocchio model becomes a MuJoCo body at the joint's placement in its
+parent joint's frame (``model.jointPlacements``), with one hinge or slide joint on the same
+axis, the joint's position limits (none for a continuous joint), and the mass, centre of mass
+and rotational inertia Pinocchio merged onto that joint from the URDF's links
+(``model.inertias``: every link rigidly attached to it, fixed joints included). The URDF's
+``<dynamics damping friction>`` become the joint's damping and friction loss; its armature
+(``model.armature``) is kept where it is given, else :data:`DEFAULT_ARMATURE` (a URDF has no
+rotor inertia; a drive has one, and it keeps a light distal link's dynamics from being stiff
+at a 1 ms step).
+
+One actuator per joint, on every joint of the model (the controller's step gives every joint a
+rate, 0 for those it does not drive, so a gripper's fingers are held still): a velocity
+servo by default, ``τ_j = k_v,j (q̇_cmd,j - q̇_j)`` (N m or N), or a position servo,
+``τ_j = k_p,j (q_ref,j - q_j) - k_v,j q̇_j``. The gains are set per joint from the joint
+space inertia at the model's home configuration (:func:`servo_gains`), so that every joint's
+loop has the same time constant whatever the robot's size. The URDF's effort limit, where it
+gives one, saturates the actuator's force (``forcerange``); its velocity limit bounds the
+velocity servo's command (``ctrlrange``).
+
+Gravity acts (0, 0, -9.81 m/s² in the world), and by default the drives compensate it
+(``gravcomp`` on every body, as a real arm's joint controllers do); the integrator is
+``implicitfast`` (the velocity servo's damping taken implicitly: with MuJoCo's default
+explicit Euler the panda's light fingers diverged in the design's prototype). Contacts are
+off: the plant simulates the arm's joint dynamics, and self-collision is the controller's
+concern (``Controller(collision=True)``), so the URDF's meshes are not needed here (the
+viewer draws the simulated robot from them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import PlantError
+from ..kinematics.manipulator import Robot
+
+DEFAULT_ARMATURE = 0.01
+"""kg m² (rad joints) or kg (prismatic joints): the armature a joint gets when the model gives
+none (a URDF cannot; a small geared drive's rotor inertia reflected through its gear is of this
+order or larger)."""
+
+GRAVITY = (0.0, 0.0, -9.81)
+"""m/s², world frame."""
+
+MIN_MASS = 1e-9
+"""kg: a moving body lighter than this has no inertia for MuJoCo (its ``mjMINVAL`` is 1e-15 on
+the mass and the inertia; a body below this is what a URDF without ``<inertial>`` gives)."""
+
+_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+
+@dataclass(frozen=True)
+class JointLayout:
+    """Where each moving joint's coordinates sit in Pinocchio's q and in MuJoCo's qpos.
+
+    Attributes:
+        names: the moving joints, in velocity order (:attr:`Robot.joint_names`).
+        idx_q: each joint's first index in Pinocchio's q.
+        idx_v: each joint's index in Pinocchio's v (and the actuator's index in MuJoCo).
+        continuous: each joint's kind: True for a continuous joint, whose Pinocchio q holds
+            (cos θ, sin θ) and MuJoCo's qpos θ.
+        qpos: each joint's index in MuJoCo's qpos; qvel: in MuJoCo's qvel; actuator: its
+            servo's index in MuJoCo's actuators (and ctrl).
+    """
+
+    names: tuple[str, ...]
+    idx_q: np.ndarray
+    idx_v: np.ndarray
+    continuous: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    actuator: np.ndarray
+
+    def to_mujoco(self, q: np.ndarray) -> np.ndarray:
+        """MuJoCo's qpos (nq_mujoco,) for Pinocchio's q (nq,): θ = atan2(sin, cos) for a
+        continuous joint, the value itself otherwise (rad or m)."""
+        qpos = np.empty(self.qpos.size)
+        first = q[self.idx_q]
+        second = q[np.minimum(self.idx_q + 1, q.size - 1)]
+        qpos[self.qpos] = np.where(self.continuous, np.arctan2(second, first), first)
+        return qpos
+
+    def from_mujoco(self, qpos: np.ndarray, nq: int) -> np.ndarray:
+        """Pinocchio's q (nq,) for MuJoCo's qpos: (cos θ, sin θ) for a continuous joint."""
+        q = np.empty(nq)
+        value = qpos[self.qpos]
+        q[self.idx_q] = np.where(self.continuous, np.cos(value), value)
+        continuous = self.idx_q[self.continuous]
+        q[continuous + 1] = np.sin(value[self.continuous])
+        return q
+
+
+def build_spec(
+    robot: Robot,
+    *,
+    timestep: float,
+    actuator: str = "velocity",
+    gravity_compensation: bool = True,
+    missing_mass: float | None = None,
+) -> Any:
+    """The ``mujoco.MjSpec`` of ``robot`` (see the module docstring): its ``actuator``
+    servos (``"velocity"`` or ``"position"``) with unit gains (:func:`set_servo_gains` sets
+    them on the compiled model), and a site named ``"tip"`` at the robot's tip frame.
+
+    Raises:
+        PlantError: naming the joints whose bodies have no mass (a URDF link without
+            ``<inertial>``; ``missing_mass`` (kg) gives each of them that mass, as a solid
+            sphere of radius 5 cm at the joint), or a joint kind MuJoCo's hinge and slide
+            joints cannot represent.
+    """
+    import mujoco
+
+    model = robot.model
+    spec = mujoco.MjSpec()
+    spec.modelname = robot.name or "pinrate robot"
+    spec.option.timestep = timestep
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.gravity = GRAVITY
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+    spec.compiler.autolimits = True
+    spec.compiler.degree = False  # joint ranges in radians, as the URDF gives them
+    massless = [model.names[index] for index in range(1, model.njoints) if model.inertias[index].mass < MIN_MASS]
+    if massless and missing_mass is None:
+        raise PlantError(
+            f"robot {robot.name!r}: MuJoCo needs a mass on every moving body, and the links moved by "
+            f"{', '.join(massless)} have none (no <inertial> in the URDF): add <inertial> elements, or "
+            "pass missing_mass=<kg> to give each such body that mass (a 5 cm solid sphere at its joint)"
+        )
+    bodies: dict[int, Any] = {0: spec.worldbody}
+    for index in range(1, model.njoints):
+        joint = model.joints[index]
+        if joint.nv != 1:
+            raise PlantError(
+                f"robot {robot.name!r}: joint {model.names[index]!r} is a {joint.shortname()} "
+                "(more than one degree of freedom): the MuJoCo plant takes revolute, continuous "
+                "and prismatic joints"
+            )
+        placement = model.jointPlacements[index]
+        body = bodies[model.parents[index]].add_body(
+            name=model.names[index],
+            pos=placement.translation,
+            quat=pin.Quaternion(placement.rotation).coeffs()[[3, 0, 1, 2]],
+        )
+        body.gravcomp = 1.0 if gravity_compensation else 0.0
+        _set_inertia(body, model.inertias[index], missing_mass)
+        _add_joint(mujoco, body, robot, index)
+        bodies[index] = body
+        _add_servo(mujoco, spec, robot, index, actuator)
+    tip = model.frames[robot.tip_id]
+    placement = tip.placement
+    bodies[tip.parentJoint].add_site(
+        name="tip", pos=placement.translation, quat=pin.Quaternion(placement.rotation).coeffs()[[3, 0, 1, 2]]
+    )
+    return spec
+
+
+def _set_inertia(body: Any, inertia: pin.Inertia, missing_mass: float | None) -> None:
+    """The body's mass (kg), centre of mass (m, body frame) and inertia about it (kg m²)."""
+    body.explicitinertial = True
+    if inertia.mass < MIN_MASS:
+        mass = float(missing_mass)  # type: ignore[arg-type]  # build_spec refused None
+        body.mass = mass
+        body.ipos = [0.0, 0.0, 0.0]
+        body.inertia = [0.4 * mass * 0.05**2] * 3  # 2/5 m r², a solid sphere
+        return
+    rotational = inertia.inertia
+    body.mass = inertia.mass
+    body.ipos = inertia.lever
+    # MuJoCo's fullinertia: (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) about the centre of mass.
+    body.fullinertia = [
+        rotational[0, 0],
+        rotational[1, 1],
+        rotational[2, 2],
+        rotational[0, 1],
+        rotational[0, 2],
+        rotational[1, 2],
+    ]
+
+
+def _add_joint(mujoco: Any, body: Any, robot: Robot, index: int) -> None:
+    """The hinge or slide of Pinocchio joint ``index`` on ``body``: axis, limits, damping,
+    friction loss and armature (see the module docstring)."""
+    model = robot.model
+    joint = model.joints[index]
+    kind = joint.shortname().removeprefix("JointModel")
+    if kind.startswith("R"):
+        joint_type = mujoco.mjtJoint.mjJNT_HINGE
+    elif kind.startswith("P"):
+        joint_type = mujoco.mjtJoint.mjJNT_SLIDE
+    else:
+        raise PlantError(
+            f"robot {robot.name!r}: joint {model.names[index]!r} is a {kind}, not a revolute or prismatic joint"
+        )
+    axis = _AXES.get(kind[-1]) if kind[-1] in _AXES else tuple(np.asarray(joint.extract().axis, dtype=float))
+    added = body.add_joint(name=model.names[index], type=joint_type, axis=axis)
+    v, q = joint.idx_v, joint.idx_q
+    if joint.nq == 1:
+        lower, upper = float(model.lowerPositionLimit[q]), float(model.upperPositionLimit[q])
+        if np.isfinite(lower) and np.isfinite(upper) and lower < upper:
+            added.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+            added.range = [lower, upper]
+    damping = float(model.damping[v])
+    try:
+        added.damping = damping
+    except TypeError:  # MuJoCo 4: the linear term first, then its polynomial's
+        added.damping = [damping, 0.0, 0.0]
+    added.frictionloss = float(model.friction[v])
+    armature = float(model.armature[v])
+    added.armature = armature if armature > 0 else DEFAULT_ARMATURE
+
+
+def _add_servo(mujoco: Any, spec: Any, robot: Robot, index: int, kind: str) -> None:
+    """Joint ``index``'s servo: ``kind`` ``"velocity"`` (bias -k_v q̇, command bounded by the
+    velocity limit) or ``"position"`` (bias -k_p q - k_v q̇, command bounded by the position
+    limits); force bounded by the effort limit where the URDF gives one."""
+    model = robot.model
+    joint = model.joints[index]
+    servo = spec.add_actuator(name=model.names[index], target=model.names[index])
+    servo.trntype = mujoco.mjtTrn.mjTRN_JOINT
+    servo.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+    servo.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+    effort = float(model.effortLimit[joint.idx_v])
+    if np.isfinite(effort) and effort > 0:
+        servo.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        servo.forcerange = [-effort, effort]
+    if kind == "velocity":
+        speed = float(model.velocityLimit[joint.idx_v])
+        if np.isfinite(speed) and speed > 0:
+            servo.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            servo.ctrlrange = [-speed, speed]
+    elif joint.nq == 1:
+        lower, upper = float(model.lowerPositionLimit[joint.idx_q]), float(model.upperPositionLimit[joint.idx_q])
+        if np.isfinite(lower) and np.isfinite(upper) and lower < upper:
+            servo.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            servo.ctrlrange = [lower, upper]
+
+
+def set_servo_gains(
+    mujoco: Any, mj_model: Any, layout: JointLayout, home: np.ndarray, kind: str, time_constant: float
+) -> np.ndarray:
+    """Set every servo's gains for a loop of time constant T = ``time_constant`` (s) at the
+    configuration ``home`` (Pinocchio's q), from the joint space inertia's diagonal there,
+    M_jj (armature included; kg m² or kg):
+
+        velocity servo:  k_v = M_jj / T              (q̇ reaches q̇_cmd as 1 - exp(-t / T))
+        position servo:  k_p = M_jj / T², k_v = 2 M_jj / T   (critically damped, ω = 1 / T)
+
+    (the other joints' coupling neglected: M's diagonal dominates a serial arm's). Returns
+    the M_jj, in velocity order."""
+    data = mujoco.MjData(mj_model)
+    data.qpos[:] = layout.to_mujoco(home)
+    mujoco.mj_forward(mj_model, data)
+    inertia = np.zeros((mj_model.nv, mj_model.nv))
+    try:
+        mujoco.mj_fullM(mj_model, data, inertia)
+    except TypeError:  # MuJoCo 3: (model, destination, qM)
+        mujoco.mj_fullM(mj_model, inertia, data.qM)
+    diagonal = np.diag(inertia)[layout.qvel]
+    for actuator, m_jj in zip(layout.actuator, diagonal, strict=True):
+        if kind == "velocity":
+            gain, stiffness, damping = m_jj / time_constant, 0.0, m_jj / time_constant
+        else:
+            gain = stiffness = m_jj / time_constant**2
+            damping = 2.0 * m_jj / time_constant
+        mj_model.actuator_gainprm[actuator, 0] = gain
+        mj_model.actuator_biasprm[actuator, :3] = (0.0, -stiffness, -damping)
+    return diagonal
+
+
+def joint_layout(robot: Robot, mj_model: Any) -> JointLayout:
+    """The :class:`JointLayout` of ``robot`` in ``mj_model`` (built by :func:`build_spec`)."""
+    import mujoco
+
+    model = robot.model
+    ids = [model.getJointId(name) for name in robot.joint_names]
+    mj_joints = [mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, name) for name in robot.joint_names]
+    return JointLayout(
+        names=tuple(robot.joint_names),
+        idx_q=np.array([model.joints[index].idx_q for index in ids]),
+        idx_v=np.array([model.joints[index].idx_v for index in ids]),
+        continuous=np.array([model.joints[index].nq == 2 for index in ids]),
+        qpos=np.array([mj_model.jnt_qposadr[joint] for joint in mj_joints]),
+        qvel=np.array([mj_model.jnt_dofadr[joint] for joint in mj_joints]),
+        actuator=np.array(
+            [mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_ACTUATOR, name) for name in robot.joint_names]
+        ),
+    )
+
+
+__all__ = ["DEFAULT_ARMATURE", "GRAVITY", "MIN_MASS", "JointLayout", "build_spec", "joint_layout", "set_servo_gains"]
