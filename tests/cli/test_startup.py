@@ -86,6 +86,7 @@ def test_each_choice_copied_into_the_parser_matches_its_source() -> None:
     from pinrate.control.servo_loop import MAX_STEPS
     from pinrate.control.singularity import STRATEGIES, WRIST_STRATEGIES
     from pinrate.kinematics.urdf_structure import MAX_JOINTS
+    from pinrate.plants.mujoco_plant import ACTUATORS
     from pinrate.solvers.registry import ALGORITHMS
     from pinrate.teleop.session import FRAMES
 
@@ -95,6 +96,7 @@ def test_each_choice_copied_into_the_parser_matches_its_source() -> None:
     assert parser.FRAMES == FRAMES
     assert parser.MAX_JOINTS == MAX_JOINTS
     assert parser.MAX_STEPS == MAX_STEPS
+    assert parser.ACTUATORS == ACTUATORS
 
 
 @pytest.mark.parametrize("name", SUBCOMMANDS)

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LinearSegmentedColormap, LogNorm
 
+from ..control.trajectory import Trajectory
 from .regions import RegionMap
 from .sweeps import Sweep
 
@@ -102,6 +103,37 @@ def sweep_png(sweep: Sweep, path: Path, *, title: str = "") -> Path:
     axes.grid(alpha=0.3)
     axes.legend(loc="best")
     axes.set_title(title or f"convergence against {sweep.parameter}")
+    figure.tight_layout()
+    figure.savefig(path)
+    plt.close(figure)
+    return path
+
+
+def plant_tracking_png(trajectory: Trajectory, joint_names: tuple[str, ...], path: Path, *, title: str = "") -> Path:
+    """A run on a plant (``trajectory.plant``): each joint's commanded rate (line) and the
+    rate the plant measured (dots) against time, steps with a saturated actuator shaded, and
+    the tip's tracking error (mm) below."""
+    record = trajectory.plant
+    if record is None:
+        raise ValueError("the trajectory was not run on a plant: it has no measured rates")
+    time = np.arange(trajectory.steps) * trajectory.dt
+    figure, (rates, tracking) = plt.subplots(
+        2, 1, figsize=(8, 6), dpi=110, sharex=True, gridspec_kw={"height_ratios": [3, 1]}
+    )
+    for joint, name in enumerate(joint_names):
+        (line,) = rates.plot(time, trajectory.joint_rates[:, joint], linewidth=1.4, label=name)
+        rates.plot(time, record.measured_rates[:, joint], ".", markersize=2.5, color=line.get_color())
+    saturated = record.saturated.any(axis=1)
+    if saturated.any():
+        rates.fill_between(
+            time, 0, 1, where=saturated, transform=rates.get_xaxis_transform(), color="0.85", label="actuator saturated"
+        )
+    rates.set_ylabel("joint rate (rad/s or m/s)\nline: commanded   dots: measured")
+    rates.legend(fontsize=7, ncol=3, loc="upper right")
+    rates.set_title(title or f"{record.name}: commanded and measured joint rates")
+    tracking.plot(time, record.tracking_error * 1e3, color="black", linewidth=1.2)
+    tracking.set_ylabel("tip tracking\nerror (mm)")
+    tracking.set_xlabel("time (s)")
     figure.tight_layout()
     figure.savefig(path)
     plt.close(figure)

@@ -29,10 +29,11 @@ from ..errors import InputError
 from ..kinematics.manipulator import Robot
 from ..kinematics.partition import Partition
 from ..kinematics.targets import nearby_target
+from ..plants import Plant
 from ..solvers.error_map import THEOREM_ALGORITHMS
 from ..theorem.pointwise import coupling_along
 from .arguments import warn
-from .robot_arguments import load_robot, start_configuration
+from .robot_arguments import load_robot, make_plant, start_configuration
 
 if TYPE_CHECKING:
     from ..viewer import Viewer
@@ -105,8 +106,26 @@ def summary(robot: Robot, trajectory: Trajectory) -> str:
         f"errors     position {trajectory.position_error[0]:.4g} -> {trajectory.position_error[-1]:.3g} m,"
         f"  orientation {trajectory.orientation_error[0]:.4g} -> {trajectory.orientation_error[-1]:.3g} rad",
         *verdict_lines(robot, trajectory),
+        *plant_lines(trajectory),
     ]
     return "\n".join(lines)
+
+
+def plant_lines(trajectory: Trajectory) -> list[str]:
+    """What the plant did beside the commands (a run on a plant; none otherwise): the tip's
+    tracking error, the joint rates' largest difference, the steps with a saturated actuator."""
+    record = trajectory.plant
+    if record is None or not trajectory.steps:
+        return []
+    tracking = record.tracking_error
+    difference = np.abs(record.measured_rates - trajectory.joint_rates).max()
+    saturated = int(record.saturated.any(axis=1).sum())
+    return [
+        f"plant      {record.name}",
+        f"tracking   tip {tracking.max() * 1e3:.3g} mm at most, {np.sqrt(np.mean(tracking**2)) * 1e3:.3g} mm RMS "
+        f"(measured against commanded, per step); joint rates differ by {difference:.3g} at most; "
+        f"actuators saturated on {saturated} of {trajectory.steps} steps",
+    ]
 
 
 def _status_line(index: int, count: int, trajectory: Trajectory) -> str:
@@ -116,7 +135,9 @@ def _status_line(index: int, count: int, trajectory: Trajectory) -> str:
         f"segment {index}/{count}  {trajectory.algorithm}  {trajectory.steps} steps  "
         f"{'converged' if trajectory.converged else 'NOT converged'}  "
         f"position {trajectory.position_error[-1]:.2e} m  orientation {trajectory.orientation_error[-1]:.2e} rad  "
-        f"rho {radius}" + ("" if trajectory.converged else f"  ({trajectory.reason})")
+        f"rho {radius}"
+        + ("" if trajectory.plant is None else f"  tracking {trajectory.plant.tracking_error.max() * 1e3:.3g} mm")
+        + ("" if trajectory.converged else f"  ({trajectory.reason})")
     )
 
 
@@ -130,11 +151,19 @@ robot nobody designed for it need not meet; both runs are reported, so the lesso
 
 
 def _segment(
-    args: argparse.Namespace, robot: Robot, partition: Partition, q: np.ndarray, target: np.ndarray
+    args: argparse.Namespace, robot: Robot, partition: Partition, q: np.ndarray, target: np.ndarray, plant: Plant | None
 ) -> list[Trajectory]:
     """The runs of one segment: the algorithm asked for, or the default and, when it does not
-    converge, :data:`FALLBACK_ALGORITHM` from the same start (the last run is the one kept)."""
-    settings = {"partition": partition, "dt": args.dt, "gain": args.gain, "max_steps": args.max_steps, "tol": args.tol}
+    converge, :data:`FALLBACK_ALGORITHM` from the same start (the last run is the one kept);
+    on ``plant`` when one is given."""
+    settings = {
+        "partition": partition,
+        "dt": args.dt,
+        "gain": args.gain,
+        "max_steps": args.max_steps,
+        "tol": args.tol,
+        "plant": plant,
+    }
     runs = [servo(robot, q, target, algorithm=args.algorithm or DEFAULT_ALGORITHM, **settings)]
     if args.algorithm is None and not runs[0].converged:
         runs.append(servo(robot, q, target, algorithm=FALLBACK_ALGORITHM, **settings))
@@ -212,7 +241,13 @@ def demo(args: argparse.Namespace) -> int:
         if args.no_viewer:
             raise InputError("--record writes the viewer's replay: drop --no-viewer")
         record = _record_file(args.record)
+    plot = None
+    if args.plot is not None:
+        if args.plant == "kinematic":
+            raise InputError("--plot draws the measured joint rates of a plant: add --plant mujoco")
+        plot = check_output_file(args.plot, "--plot")
     robot = load_robot(args)
+    plant = make_plant(robot, args)
     partition = Partition.auto(robot)
     start = robot.home() if args.q0 is None else start_configuration(robot, args.q0)
     count = 1 if args.target is not None else args.targets
@@ -237,7 +272,7 @@ def demo(args: argparse.Namespace) -> int:
             targets = itertools.chain(framed, targets)
         all_converged = True
         for index, target in enumerate(targets, start=1):
-            runs = _segment(args, robot, partition, q, target)
+            runs = _segment(args, robot, partition, q, target, plant)
             trajectory = runs[-1]
             position, rpy = target[:3, 3], pin.rpy.matrixToRpy(target[:3, :3])
             print(
@@ -260,6 +295,10 @@ def demo(args: argparse.Namespace) -> int:
                 viewer.play(trajectory, target=target, speed=args.speed)
             all_converged &= trajectory.converged
             q = trajectory.q[-1]
+            if plot is not None:
+                from ..analysis.plots import plant_tracking_png  # matplotlib only for a plot
+
+                print(f"plot       {plant_tracking_png(trajectory, robot.joint_names, plot)} (segment {index})")
         if viewer is not None:
             if record is not None:
                 _save_record(viewer, record)

@@ -27,6 +27,12 @@ WRIST_STRATEGIES = ("turn", "split", "hold_first", "last_then_first")
 FRAMES = ("hand", "base")
 """A copy of :data:`pinrate.teleop.session.FRAMES`."""
 
+PLANTS = ("kinematic", "mujoco")
+"""``--plant``: the joints follow the rates exactly, or a MuJoCo simulation (:mod:`pinrate.plants`)."""
+
+ACTUATORS = ("velocity", "position")
+"""A copy of :data:`pinrate.plants.mujoco_plant.ACTUATORS`."""
+
 MAX_JOINTS = 100
 """A copy of :data:`pinrate.kinematics.urdf_structure.MAX_JOINTS` (for the help text only)."""
 
@@ -165,6 +171,24 @@ def _demo(demo: argparse.ArgumentParser) -> None:
         help="address the Meshcat server listens on (default: this machine only; another one is warned about)",
     )
     demo.add_argument("--no-viewer", action="store_true", help="headless: print the summary only")
+    add_plant_arguments(demo)
+    demo.add_argument(
+        "--plot", metavar="PNG", help="with --plant mujoco: the commanded and measured joint rates of the run, as a PNG"
+    )
+
+
+def add_plant_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--plant`` and ``--actuator``: what the controller drives (demo and teleop)."""
+    parser.add_argument(
+        "--plant",
+        default="kinematic",
+        choices=PLANTS,
+        help="what the controller drives: the kinematic robot (default) or a MuJoCo simulation of it "
+        '(pip install "pinrate[mujoco]"), read back each step',
+    )
+    parser.add_argument(
+        "--actuator", default="velocity", choices=ACTUATORS, help="the MuJoCo plant's joint servos (default velocity)"
+    )
 
 
 def _teleop(teleop: argparse.ArgumentParser) -> None:
@@ -184,6 +208,7 @@ def _teleop(teleop: argparse.ArgumentParser) -> None:
     teleop.add_argument("--max-linear-speed", type=positive, default=0.1, help="m/s at full deflection")
     teleop.add_argument("--max-angular-speed", type=positive, default=0.5, help="rad/s at full deflection")
     teleop.add_argument("--collision", action="store_true", help="monitor self-collision (the URDF's collision meshes)")
+    add_plant_arguments(teleop)
     teleop.add_argument(
         "--q0", nargs="+", type=float, metavar="Q", help="start configuration: one value per moving joint"
     )

@@ -1,7 +1,8 @@
 """The robot the command line names, shared by ``demo``, ``analyze`` and ``teleop``: ``ROBOT``
-with ``--tip``, ``--sensor``, ``--max-joints`` and ``--xacro-arg`` loaded into a :class:`~pinrate.Robot`, and
-``--q0`` checked into a start configuration (the parser declares them, with nothing heavy
-loaded: :func:`.parser.add_robot_arguments`).
+with ``--tip``, ``--sensor``, ``--max-joints`` and ``--xacro-arg`` loaded into a
+:class:`~pinrate.Robot`, ``--q0`` checked into a start configuration, and ``--plant`` made
+into a plant (the parser declares them, with nothing heavy loaded:
+:func:`.parser.add_robot_arguments`).
 
 Importing this module loads numpy and Pinocchio: the subcommands' modules import it, and
 :func:`.entry.main` imports those once the arguments are parsed.
@@ -15,6 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..kinematics.manipulator import Robot
+from ..plants import MujocoPlant, Plant
 from ..robots import load
 
 
@@ -44,3 +46,15 @@ def start_configuration(robot: Robot, values: list[float]) -> np.ndarray:
     for joint, value in zip(robot.joint_names, values, strict=True):
         robot.set_joint_values(q, joint, np.array([value]))
     return robot.check_q(q[0])
+
+
+def make_plant(robot: Robot, args: argparse.Namespace) -> Plant | None:
+    """``--plant`` and ``--actuator``: None for the kinematic robot (the loops' own
+    integration), else a :class:`~pinrate.plants.MujocoPlant` of ``robot``; says which."""
+    if args.plant == "kinematic":
+        if args.actuator != "velocity":
+            raise InputError("--actuator chooses the MuJoCo plant's servos: add --plant mujoco")
+        return None
+    plant = MujocoPlant(robot, actuator=args.actuator)
+    print(f"plant      {plant.name}, timestep {plant.timestep * 1e3:g} ms")
+    return plant

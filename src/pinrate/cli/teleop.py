@@ -12,7 +12,7 @@ from ..errors import InputError
 from ..teleop import Teleop
 from .arguments import warn
 from .outputs import output_folder
-from .robot_arguments import load_robot, start_configuration
+from .robot_arguments import load_robot, make_plant, start_configuration
 
 MAX_RATE = 5000.0
 """Hz: the fastest control loop the console accepts (a step costs 40-60 µs in Python)."""
@@ -49,6 +49,7 @@ def _serve(args: argparse.Namespace) -> int:
         wrist=args.wrist,
         dt=1.0 / args.rate,
         collision=args.collision,
+        plant=make_plant(robot, args),
     )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)

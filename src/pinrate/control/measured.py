@@ -18,10 +18,13 @@ import numpy as np
 from .controller import Controller
 
 
-def onto_limits(controller: Controller, q: np.ndarray, tolerance: np.ndarray) -> tuple[np.ndarray, str]:
+def onto_limits(
+    controller: Controller, q: np.ndarray, tolerance: np.ndarray, *, clip: bool = False
+) -> tuple[np.ndarray, str]:
     """(q for the controller, "" or the words naming each joint past a kept limit by more
     than its ``tolerance``; velocity order, rad or m). Joints past a limit by at most their
-    tolerance are put on it (a copy of ``q``; ``q`` itself when nothing moved)."""
+    tolerance are put on it (a copy of ``q``; ``q`` itself when nothing moved); with
+    ``clip``, the joints past it by more too (for a loop that halts and goes on from there)."""
     if not controller.position_limits:
         return q, ""
     view = q
@@ -36,7 +39,8 @@ def onto_limits(controller: Controller, q: np.ndarray, tolerance: np.ndarray) ->
                 f"{limit.joint} at {value:.6g}, {abs(value - bound):.3g} past its limit {bound:.6g} "
                 f"(tolerance {tolerance[limit.velocity]:.3g})"
             )
-            continue
+            if not clip:
+                continue
         if view is q:
             view = q.copy()
         view[limit.q_index] = bound

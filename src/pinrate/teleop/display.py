@@ -57,14 +57,18 @@ class Said:
     dead_man: str = ""
 
 
-def describe(step: Step | None, *, halted: bool = False, reversing: bool = False, dead_man: str = "") -> Said:
+def describe(
+    step: Step | None, *, halted: bool = False, reversing: bool = False, dead_man: str = "", fault: str = ""
+) -> Said:
     """The words and colour for ``step``: "idle" when nothing moved and nothing limited it,
-    "halted" while the operator's halt holds, "dead man: …" (black) when the dead man stopped
-    the robot (``dead_man``: :attr:`.session.Teleop.dead_man`) and it has not moved since,
+    "halted" while the operator's halt holds (or the plant's: ``fault`` says why), "dead
+    man: …" (black) when the dead man stopped the robot (``dead_man``:
+    :attr:`.session.Teleop.dead_man`) and it has not moved since,
     "reversing: …" during a reversal; the detail names the joint, the block and the numbers
     (the step's own ``detail``), and the frozen joints."""
     if halted:
-        return Said("halted", RED, "the operator halted the robot: click resume to drive it", ())
+        why = f"{fault}: click resume" if fault else "the operator halted the robot: click resume to drive it"
+        return Said("halted", RED, why, ())
     if dead_man and not reversing and (step is None or not step.joint_rates.any()):
         detail = "the robot stopped because the operator's input stopped; drive again to go on"
         return Said(f"dead man: {dead_man}", BLACK, detail, (), dead_man)

@@ -98,7 +98,9 @@ class Readout:
         q, step = teleop.q.copy(), teleop.last
         # The dead man is set from another thread: the step read before it may still move,
         # and then the frame says "moving" and no dead man until the still step is read.
-        said = describe(step, halted=teleop.halted, reversing=teleop.reversing, dead_man=teleop.dead_man)
+        said = describe(
+            step, halted=teleop.halted, reversing=teleop.reversing, dead_man=teleop.dead_man, fault=teleop.plant_fault
+        )
         frame: dict[str, Any] = {
             "type": "frame",
             "input_seq": input_seq,

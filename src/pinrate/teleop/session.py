@@ -48,8 +48,10 @@ import numpy as np
 from ..checks import check_positive
 from ..control.commands import JointJog
 from ..control.controller import Controller, Step
+from ..control.measured import onto_limits
 from ..errors import InputError, choices_hint
 from ..kinematics.manipulator import Robot, check_robot
+from ..plants import Measurement, Plant
 from .held import STILL, Held, check_time, deflection
 from .recording import Recording
 from .way_back import WayBack
@@ -73,11 +75,15 @@ class Teleop:
         timeout: s; a command older than this at a tick counts as zero (the dead man).
         history: s of motion kept for :meth:`reverse`.
         frame: ``"hand"`` (the sensor frame's axes, Barker) or ``"base"`` (the world's).
+        plant: a :class:`~pinrate.plants.Plant` of ``robot`` that each tick drives for dt:
+            :attr:`q` is then what it measured (:mod:`pinrate.control.measured`); None
+            (default): each step's own q.
         **controller_options: keyword options of :class:`Controller` (default algorithm
             ``"exact"``).
 
     Attributes:
         q: the current configuration (nq,).
+        measurement: the plant's last :class:`~pinrate.plants.Measurement` (None without a plant).
         last: the last tick's :class:`Step` (None before the first).
         halted: True after :meth:`halt` until :meth:`resume`: ticks command nothing and
             :meth:`reverse` is refused (a halted robot does not move).
@@ -85,6 +91,7 @@ class Teleop:
             see :meth:`dead_man_stop`), or "" when it has not since the operator last drove,
             stopped, halted, resumed, reversed or went home. Latched, so that a page that
             went silent sees why the robot stopped once it speaks again.
+        plant_fault: why the plant halted the console ("" when it has not), until :meth:`resume`.
     """
 
     def __init__(
@@ -97,6 +104,7 @@ class Teleop:
         timeout: float = 0.25,
         history: float = 30.0,
         frame: str = "hand",
+        plant: Plant | None = None,
         **controller_options: object,
     ) -> None:
         self.robot = check_robot(robot)
@@ -112,12 +120,17 @@ class Teleop:
         self.controller = self._controller(options)
         self.q = robot.home() if q0 is None else robot.check_q(q0)
         self.controller.check_inside_limits(self.q)
+        if plant is not None and (not isinstance(plant, Plant) or plant.robot is not robot):
+            raise InputError("plant must be a pinrate.plants.Plant built on this robot")
+        self.plant = plant
+        self.measurement: Measurement | None = None if plant is None else plant.reset(self.q)
         self._way_back = WayBack(history)
         self.recorder = self._way_back.recorder
         """The motion kept for :meth:`reverse` (times on the motion clock, s)."""
         self.last: Step | None = None
         self.halted = False
         self.dead_man = ""
+        self.plant_fault = ""
         self._command = STILL
         self._recording: Recording | None = None
 
@@ -149,8 +162,7 @@ class Teleop:
         (its limits apply from the next tick). Bad options raise InputError and change
         nothing."""
         options = {**self._options, **controller_options}
-        controller = self._controller(options)
-        self.controller, self._options = controller, options
+        self.controller, self._options = (controller := self._controller(options)), options
         if self._way_back.playback is not None:
             self._way_back.playback.controller = controller
 
@@ -177,11 +189,7 @@ class Teleop:
             raise InputError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
         if mode == "uncoupled" and not self.controller.index.m:
             raise InputError("the uncoupled mode moves the wrist centre: this partition controls no linear component")
-        linear_speed, angular_speed = (
-            linear_deflection * self.max_linear_speed,
-            angular_deflection * self.max_angular_speed,
-        )
-        held = Held(linear_speed, angular_speed, stamp, mode)
+        held = Held(linear_deflection * self.max_linear_speed, angular_deflection * self.max_angular_speed, stamp, mode)
         self._command = held
         if held.moves:
             self.dead_man = ""  # the operator drives again
@@ -233,6 +241,7 @@ class Teleop:
         """Accept commands again after :meth:`halt`."""
         self.halted = False
         self.dead_man = ""
+        self.plant_fault = ""
 
     def reset(self, q: object = None) -> None:
         """Back to ``q`` (default ``robot.home()``) at once: command, record and reversal
@@ -243,6 +252,8 @@ class Teleop:
         self.controller.check_inside_limits(start)
         self.stop()
         self.q = start
+        if self.plant is not None:
+            self.measurement = self.plant.reset(start)
         self._way_back.clear()
         self.controller.reset()
         self.last = None
@@ -325,7 +336,7 @@ class Teleop:
             way_back.end(self.q)
         if way_back.playback is not None:
             step = way_back.step(self.q)
-            self.q = step.q
+            self._move(step)
         else:
             step = self._operator_step(held)
         self.last = step
@@ -339,10 +350,23 @@ class Teleop:
         observation = controller.observe_unchecked(self.q)
         command = held.command(controller, observation, self._frame, self.max_linear_speed)
         step = controller.step(self.q, command, observation=observation)
+        before = self.q
+        self._move(step)
         if step.joint_rates.any():
-            self._way_back.record(self.q, step.q, controller.dt)
-        self.q = step.q
+            self._way_back.record(before, self.q, controller.dt)
         return step
+
+    def _move(self, step: Step) -> None:
+        """:attr:`q` after ``step``: its own, or the plant's measurement after dt (a joint past a
+        limit by more than the plant's tolerance: put on it, a halt, :attr:`plant_fault`)."""
+        if self.plant is None:
+            self.q = step.q
+            return
+        self.measurement = self.plant.advance(step.joint_rates, self.controller.dt)
+        self.q, beyond = onto_limits(self.controller, self.measurement.q, self.plant.limit_tolerance, clip=True)
+        if beyond:
+            self.halt()
+            self.plant_fault = f"the plant went past a position limit: {beyond}"
 
     # ------------------------------------------------------------------ a run for saving
     @property
