@@ -306,3 +306,27 @@ def test_a_save_that_fails_part_way_leaves_the_old_file(run, tmp_path: Path) -> 
     assert path.read_bytes() == old
     assert sorted(os.listdir(tmp_path)) == ["run.npz"]
     assert_valid(pinrate.Trajectory.load(path), "the old file")
+
+
+def test_a_plant_record_is_saved_whole_and_a_partial_one_refused(tmp_path: Path) -> None:
+    from pinrate.plants import KinematicPlant
+
+    robot = pinrate.load("ur5")
+    target = robot.pose(robot.home())
+    target[:3, 3] += 0.05
+    trajectory = pinrate.servo(robot, robot.home(), target, plant=KinematicPlant(robot), max_steps=20)
+    path = trajectory.save(tmp_path / "run.npz")
+    loaded = pinrate.Trajectory.load(path)
+    assert loaded.plant is not None and loaded.plant.name == "kinematic"
+    np.testing.assert_array_equal(loaded.plant.measured_rates, trajectory.joint_rates)
+    with np.load(path) as npz:
+        members = {name: npz[name] for name in npz.files}
+    partial = dict(members)
+    del partial["saturated"]
+    np.savez(tmp_path / "partial.npz", **partial)
+    with pytest.raises(pinrate.InputError, match="without saturated: a plant record has all four"):
+        pinrate.Trajectory.load(tmp_path / "partial.npz")
+    wrong = dict(members, tracking_error=-np.ones(trajectory.steps))
+    np.savez(tmp_path / "negative.npz", **wrong)
+    with pytest.raises(pinrate.InputError, match="tracking_error"):
+        pinrate.Trajectory.load(tmp_path / "negative.npz")
