@@ -63,12 +63,13 @@ def test_no_private_module_exists_or_is_imported_across_subpackages() -> None:
 
 def test_no_import_inside_a_function_except_optional_dependencies() -> None:
     """Deferred imports only for what not every run needs (Dask, the browser viewer, the
-    teleop console's server: meshcat and tornado; xacrodoc, the ``pinrate[xacro]`` extra),
+    teleop console's server: meshcat and tornado; xacrodoc, the ``pinrate[xacro]`` extra;
+    MuJoCo, the ``pinrate[mujoco]`` extra; matplotlib's plots for ``demo --plot``),
     and in the CLI's entry point, once the arguments are parsed and inside its Ctrl-C guard,
     the subcommand's module and the error it catches, and for ``--version`` the compiled
     core's bridge (so ``--help`` loads none); the CLI's package and its console script load
     the entry point itself only when called."""
-    allowed = {"distributed", "pinrate.viewer", "viewer", "teleop.server", "xacro", "xacrodoc"}
+    allowed = {"distributed", "pinrate.viewer", "viewer", "teleop.server", "xacro", "xacrodoc", "mujoco", "analysis.plots"}
     entry = {"robot_list", "demo", "analyze", "paper_results", "teleop", "errors", "compiled"}
     for path in PACKAGE.rglob("*.py"):
         tree = ast.parse(path.read_text(encoding="utf-8"))

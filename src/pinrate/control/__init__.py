@@ -5,7 +5,7 @@ from .controller import Controller, Observation, Step
 from .recorder import Playback, Recorder
 from .servo_loop import servo
 from .status import Status
-from .trajectory import Trajectory
+from .trajectory import PlantRecord, Trajectory
 
 __all__ = [
     "Controller",
@@ -15,6 +15,7 @@ __all__ = [
     "PoseGoal",
     "Recorder",
     "Status",
+    "PlantRecord",
     "Step",
     "Trajectory",
     "Uncoupled",

@@ -16,7 +16,7 @@ One actuator per joint, on every joint of the model (the controller's step gives
 rate, 0 for those it does not drive, so a gripper's fingers are held still): a velocity
 servo by default, ``τ_j = k_v,j (q̇_cmd,j - q̇_j)`` (N m or N), or a position servo,
 ``τ_j = k_p,j (q_ref,j - q_j) - k_v,j q̇_j``. The gains are set per joint from the joint
-space inertia at the model's home configuration (:func:`servo_gains`), so that every joint's
+space inertia at the model's home configuration (:func:`set_servo_gains`), so that every joint's
 loop has the same time constant whatever the robot's size. The URDF's effort limit, where it
 gives one, saturates the actuator's force (``forcerange``); its velocity limit bounds the
 velocity servo's command (``ctrlrange``).

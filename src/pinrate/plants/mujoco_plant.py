@@ -28,7 +28,7 @@ from ..checks import check_positive
 from ..errors import InputError, PlantError
 from ..kinematics.manipulator import Robot
 from .mujoco_model import build_spec, joint_layout, set_servo_gains
-from .plant import Measurement, Plant
+from .abstract_plant import Measurement, Plant
 
 ACTUATORS = ("velocity", "position")
 """The values of ``MujocoPlant(actuator=...)``."""

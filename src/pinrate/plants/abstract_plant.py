@@ -2,7 +2,7 @@
 reports the configuration it measured; the controller reads that measurement at its next step
 (the closed loop of Shoham & Koren's Fig. 3), never its own integrated q.
 
-Two plants: :class:`~.kinematic.KinematicPlant` (the next q is the integrated rates,
+Two plants: :class:`~.kinematic_plant.KinematicPlant` (the next q is the integrated rates,
 exactly: pinrate's behaviour without a plant) and :class:`~.mujoco_plant.MujocoPlant` (a
 MuJoCo simulation of the same robot, ``pip install "pinrate[mujoco]"``).
 """

@@ -1,4 +1,4 @@
-"""The kinematic plant (pinrate.plants.kinematic): the loops' own integration."""
+"""The kinematic plant (pinrate.plants.kinematic_plant): the loops' own integration."""
 
 from __future__ import annotations
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kinematics.manipulator import Robot
-from .plant import Measurement, Plant
+from .abstract_plant import Measurement, Plant
 
 
 class KinematicPlant(Plant):
