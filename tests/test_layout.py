@@ -69,7 +69,16 @@ def test_no_import_inside_a_function_except_optional_dependencies() -> None:
     the subcommand's module and the error it catches, and for ``--version`` the compiled
     core's bridge (so ``--help`` loads none); the CLI's package and its console script load
     the entry point itself only when called."""
-    allowed = {"distributed", "pinrate.viewer", "viewer", "teleop.server", "xacro", "xacrodoc", "mujoco", "analysis.plots"}
+    allowed = {
+        "distributed",
+        "pinrate.viewer",
+        "viewer",
+        "teleop.server",
+        "xacro",
+        "xacrodoc",
+        "mujoco",
+        "analysis.plots",
+    }
     entry = {"robot_list", "demo", "analyze", "paper_results", "teleop", "errors", "compiled"}
     for path in PACKAGE.rglob("*.py"):
         tree = ast.parse(path.read_text(encoding="utf-8"))

@@ -15,7 +15,7 @@ from pinrate.errors import PlantError
 
 pytest.importorskip("mujoco")
 
-from pinrate.plants import MujocoPlant  # noqa: E402
+from pinrate.plants import MujocoPlant
 
 
 def _target(robot):
@@ -64,7 +64,13 @@ def test_position_servos_still_converge_at_the_commanded_gain(ur5):
     """The reference is integrated from the last reference, not from the lagging measured q,
     so the loop keeps its gain: the error decays as exp(-gain t) (within 5 %)."""
     trajectory = pinrate.servo(
-        ur5, ur5.home(), _target(ur5), algorithm="exact", gain=2.0, tol=1e-7, plant=MujocoPlant(ur5, actuator="position")
+        ur5,
+        ur5.home(),
+        _target(ur5),
+        algorithm="exact",
+        gain=2.0,
+        tol=1e-7,
+        plant=MujocoPlant(ur5, actuator="position"),
     )
     assert trajectory.converged
     error = trajectory.position_error + trajectory.orientation_error

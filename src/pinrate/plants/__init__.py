@@ -4,8 +4,8 @@ rates exactly (pinrate's loops without a plant), :class:`~.mujoco_plant.MujocoPl
 MuJoCo simulation of the same robot (``pip install "pinrate[mujoco]"``; MuJoCo is imported
 only when one is built)."""
 
+from .abstract_plant import Measurement, Plant
 from .kinematic_plant import KinematicPlant
 from .mujoco_plant import ACTUATORS, MujocoPlant
-from .abstract_plant import Measurement, Plant
 
 __all__ = ["ACTUATORS", "KinematicPlant", "Measurement", "MujocoPlant", "Plant"]

@@ -27,8 +27,8 @@ import numpy as np
 from ..checks import check_positive
 from ..errors import InputError, PlantError
 from ..kinematics.manipulator import Robot
-from .mujoco_model import build_spec, joint_layout, set_servo_gains
 from .abstract_plant import Measurement, Plant
+from .mujoco_model import build_spec, joint_layout, set_servo_gains
 
 ACTUATORS = ("velocity", "position")
 """The values of ``MujocoPlant(actuator=...)``."""
