@@ -95,6 +95,17 @@ def measure(robot_name: str, *, batch: int, rounds: int) -> tuple[list[timing.Ro
             timing.on(choice, batched(lambda: controller.step(q, twist, observation=observation))),
             batch,
         )
+    try:  # one controller step plus one MuJoCo plant advance of dt (10 sub-steps of 1 ms), if installed
+        from pinrate.plants import MujocoPlant
+
+        plant = MujocoPlant(robot)
+        plant.reset(q)
+        functions["controller step (exact) + MuJoCo plant advance, dt 0.01"] = (
+            batched(lambda: plant.advance(controller.step(q, twist).joint_rates, controller.dt)),
+            batch,
+        )
+    except pinrate.PinrateError:
+        pass
     guarded = pinrate.Controller(robot, partition=partition, collision=True)
     functions["controller step, self-collision (exact)"] = (batched(lambda: guarded.step(q, twist)), batch)
     functions[BARE] = (batched(bare_servo_step), batch)
