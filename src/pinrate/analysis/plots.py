@@ -131,7 +131,8 @@ def plant_tracking_png(trajectory: Trajectory, joint_names: tuple[str, ...], pat
     rates.set_ylabel("joint rate (rad/s or m/s)\nline: commanded   dots: measured")
     rates.legend(fontsize=7, ncol=3, loc="upper right")
     rates.set_title(title or f"{record.name}: commanded and measured joint rates")
-    tracking.plot(time, record.tracking_error * 1e3, color="black", linewidth=1.2)
+    # Log scale: the first steps' jump from rest would flatten the rest of the run.
+    tracking.semilogy(time, np.maximum(record.tracking_error * 1e3, 1e-9), color="black", linewidth=1.2)
     tracking.set_ylabel("tip tracking\nerror (mm)")
     tracking.set_xlabel("time (s)")
     figure.tight_layout()

@@ -12,14 +12,21 @@ and rotational inertia Pinocchio merged onto that joint from the URDF's links
 rotor inertia; a drive has one, and it keeps a light distal link's dynamics from being stiff
 at a 1 ms step).
 
-One actuator per joint, on every joint of the model (the controller's step gives every joint a
-rate, 0 for those it does not drive, so a gripper's fingers are held still): a velocity
-servo by default, ``τ_j = k_v,j (q̇_cmd,j - q̇_j)`` (N m or N), or a position servo,
-``τ_j = k_p,j (q_ref,j - q_j) - k_v,j q̇_j``. The gains are set per joint from the joint
-space inertia at the model's home configuration (:func:`set_servo_gains`), so that every joint's
-loop has the same time constant whatever the robot's size. The URDF's effort limit, where it
-gives one, saturates the actuator's force (``forcerange``); its velocity limit bounds the
-velocity servo's command (``ctrlrange``).
+A servo on every joint of the model (the controller's step gives every joint a rate, 0 for
+those it does not drive, so a gripper's fingers are held still), in N m or N:
+
+- **velocity** (default), a drive's PI velocity loop: ``τ_j = k_v,j (q̇_cmd,j - q̇_j) +
+  k_i,j (q_ref,j - q_j)``, q_ref the command integrated (so k_i multiplies the integral of
+  the velocity error): a joint comes to rest under a load (gravity, its neighbours'
+  reactions), at τ_load / k_i from its reference, where a P-only loop would drift. Two MuJoCo
+  actuators: a velocity one (damping taken implicitly) and the integral, a position one on
+  q_ref (actuator ``"<joint> integral"``);
+- **position**: ``τ_j = k_p,j (q_ref,j - q_j) - k_v,j q̇_j``, no velocity feed-forward.
+
+The gains are set per joint from the joint space inertia at the model's home configuration
+(:func:`set_servo_gains`), so that every joint's loop has the same time constant whatever the
+robot's size. The URDF's effort limit, where it gives one, bounds the joint's total actuator
+force (the joint's ``actfrcrange``); its velocity limit bounds the velocity command.
 
 Gravity acts (0, 0, -9.81 m/s² in the world), and by default the drives compensate it
 (``gravcomp`` on every body, as a real arm's joint controllers do); the integrator is
@@ -67,7 +74,8 @@ class JointLayout:
         continuous: each joint's kind: True for a continuous joint, whose Pinocchio q holds
             (cos θ, sin θ) and MuJoCo's qpos θ.
         qpos: each joint's index in MuJoCo's qpos; qvel: in MuJoCo's qvel; actuator: its
-            servo's index in MuJoCo's actuators (and ctrl).
+            servo's index in MuJoCo's actuators (and ctrl); integral: its velocity servo's
+            integral actuator, -1 for a position servo.
     """
 
     names: tuple[str, ...]
@@ -77,6 +85,7 @@ class JointLayout:
     qpos: np.ndarray
     qvel: np.ndarray
     actuator: np.ndarray
+    integral: np.ndarray
 
     def to_mujoco(self, q: np.ndarray) -> np.ndarray:
         """MuJoCo's qpos (nq_mujoco,) for Pinocchio's q (nq,): θ = atan2(sin, cos) for a
@@ -150,9 +159,8 @@ def build_spec(
         )
         body.gravcomp = 1.0 if gravity_compensation else 0.0
         _set_inertia(body, model.inertias[index], missing_mass)
-        _add_joint(mujoco, body, robot, index)
         bodies[index] = body
-        _add_servo(mujoco, spec, robot, index, actuator)
+        _add_servo(mujoco, spec, _add_joint(mujoco, body, robot, index), robot, index, actuator)
     tip = model.frames[robot.tip_id]
     placement = tip.placement
     bodies[tip.parentJoint].add_site(
@@ -184,7 +192,7 @@ def _set_inertia(body: Any, inertia: pin.Inertia, missing_mass: float | None) ->
     ]
 
 
-def _add_joint(mujoco: Any, body: Any, robot: Robot, index: int) -> None:
+def _add_joint(mujoco: Any, body: Any, robot: Robot, index: int) -> Any:
     """The hinge or slide of Pinocchio joint ``index`` on ``body``: axis, limits, damping,
     friction loss and armature (see the module docstring)."""
     model = robot.model
@@ -214,32 +222,43 @@ def _add_joint(mujoco: Any, body: Any, robot: Robot, index: int) -> None:
     added.frictionloss = float(model.friction[v])
     armature = float(model.armature[v])
     added.armature = armature if armature > 0 else DEFAULT_ARMATURE
+    return added
 
 
-def _add_servo(mujoco: Any, spec: Any, robot: Robot, index: int, kind: str) -> None:
-    """Joint ``index``'s servo: ``kind`` ``"velocity"`` (bias -k_v q̇, command bounded by the
-    velocity limit) or ``"position"`` (bias -k_p q - k_v q̇, command bounded by the position
-    limits); force bounded by the effort limit where the URDF gives one."""
+def _add_servo(mujoco: Any, spec: Any, joint: Any, robot: Robot, index: int, kind: str) -> None:
+    """Joint ``index``'s servo (``joint``: its MuJoCo joint): ``kind`` ``"velocity"`` (a
+    velocity actuator, its command bounded by the velocity limit, and the integral: a
+    position actuator on q_ref) or ``"position"`` (one position actuator on q_ref); q_ref
+    bounded by the position limits, the joint's total actuator force by the effort limit."""
     model = robot.model
-    joint = model.joints[index]
-    servo = spec.add_actuator(name=model.names[index], target=model.names[index])
-    servo.trntype = mujoco.mjtTrn.mjTRN_JOINT
-    servo.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-    servo.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-    effort = float(model.effortLimit[joint.idx_v])
+    pinocchio_joint = model.joints[index]
+    effort = float(model.effortLimit[pinocchio_joint.idx_v])
     if np.isfinite(effort) and effort > 0:
-        servo.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-        servo.forcerange = [-effort, effort]
+        joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        joint.actfrcrange = [-effort, effort]
+    name = model.names[index]
     if kind == "velocity":
-        speed = float(model.velocityLimit[joint.idx_v])
+        velocity = _add_actuator(mujoco, spec, name, name)
+        speed = float(model.velocityLimit[pinocchio_joint.idx_v])
         if np.isfinite(speed) and speed > 0:
-            servo.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
-            servo.ctrlrange = [-speed, speed]
-    elif joint.nq == 1:
-        lower, upper = float(model.lowerPositionLimit[joint.idx_q]), float(model.upperPositionLimit[joint.idx_q])
+            velocity.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            velocity.ctrlrange = [-speed, speed]
+    reference = _add_actuator(mujoco, spec, f"{name} integral" if kind == "velocity" else name, name)
+    if pinocchio_joint.nq == 1:
+        q_index = pinocchio_joint.idx_q
+        lower, upper = float(model.lowerPositionLimit[q_index]), float(model.upperPositionLimit[q_index])
         if np.isfinite(lower) and np.isfinite(upper) and lower < upper:
-            servo.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
-            servo.ctrlrange = [lower, upper]
+            reference.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            reference.ctrlrange = [lower, upper]
+
+
+def _add_actuator(mujoco: Any, spec: Any, name: str, joint: str) -> Any:
+    """An actuator on ``joint`` with a fixed gain and an affine bias (set by :func:`set_servo_gains`)."""
+    actuator = spec.add_actuator(name=name, target=joint)
+    actuator.trntype = mujoco.mjtTrn.mjTRN_JOINT
+    actuator.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+    actuator.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+    return actuator
 
 
 def set_servo_gains(
@@ -249,11 +268,13 @@ def set_servo_gains(
     configuration ``home`` (Pinocchio's q), from the joint space inertia's diagonal there,
     M_jj (armature included; kg m² or kg):
 
-        velocity servo:  k_v = M_jj / T              (q̇ reaches q̇_cmd as 1 - exp(-t / T))
-        position servo:  k_p = M_jj / T², k_v = 2 M_jj / T   (critically damped, ω = 1 / T)
+        velocity servo:  k_v = M_jj / T,  k_i = M_jj / (4 T²)
+        position servo:  k_p = M_jj / T², k_v = 2 M_jj / T
 
-    (the other joints' coupling neglected: M's diagonal dominates a serial arm's). Returns
-    the M_jj, in velocity order."""
+    Both are critically damped: the PI loop's error obeys M ë + k_v ė + k_i e = 0, a double
+    pole at -1 / (2 T) (without the integral, k_v alone: q̇ reaches q̇_cmd as
+    1 - exp(-t / T)); the position loop's, a double pole at -1 / T. The other joints' coupling
+    is neglected (M's diagonal dominates a serial arm's). Returns the M_jj, velocity order."""
     data = mujoco.MjData(mj_model)
     data.qpos[:] = layout.to_mujoco(home)
     mujoco.mj_forward(mj_model, data)
@@ -263,15 +284,21 @@ def set_servo_gains(
     except TypeError:  # MuJoCo 3: (model, destination, qM)
         mujoco.mj_fullM(mj_model, inertia, data.qM)
     diagonal = np.diag(inertia)[layout.qvel]
-    for actuator, m_jj in zip(layout.actuator, diagonal, strict=True):
+    for actuator, integral, m_jj in zip(layout.actuator, layout.integral, diagonal, strict=True):
         if kind == "velocity":
-            gain, stiffness, damping = m_jj / time_constant, 0.0, m_jj / time_constant
+            _set_gains(mj_model, actuator, m_jj / time_constant, 0.0, m_jj / time_constant)
+            stiffness = m_jj / (4.0 * time_constant**2)
+            _set_gains(mj_model, integral, stiffness, stiffness, 0.0)
         else:
-            gain = stiffness = m_jj / time_constant**2
-            damping = 2.0 * m_jj / time_constant
-        mj_model.actuator_gainprm[actuator, 0] = gain
-        mj_model.actuator_biasprm[actuator, :3] = (0.0, -stiffness, -damping)
+            stiffness = m_jj / time_constant**2
+            _set_gains(mj_model, actuator, stiffness, stiffness, 2.0 * m_jj / time_constant)
     return diagonal
+
+
+def _set_gains(mj_model: Any, actuator: int, gain: float, stiffness: float, damping: float) -> None:
+    """force = gain ctrl - stiffness q - damping q̇ (MuJoCo's fixed gain and affine bias)."""
+    mj_model.actuator_gainprm[actuator, 0] = gain
+    mj_model.actuator_biasprm[actuator, :3] = (0.0, -stiffness, -damping)
 
 
 def joint_layout(robot: Robot, mj_model: Any) -> JointLayout:
@@ -290,6 +317,12 @@ def joint_layout(robot: Robot, mj_model: Any) -> JointLayout:
         qvel=np.array([mj_model.jnt_dofadr[joint] for joint in mj_joints]),
         actuator=np.array(
             [mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_ACTUATOR, name) for name in robot.joint_names]
+        ),
+        integral=np.array(
+            [
+                mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{name} integral")
+                for name in robot.joint_names
+            ]
         ),
     )
 

@@ -6,13 +6,14 @@ default; ``implicitfast``; no contacts). An advance holds the commanded joint ra
 duration in sub-steps of at most ``timestep`` (the controller's dt and the simulation's step
 are independent: n = ceil(duration / timestep) sub-steps of duration / n each):
 
-- **velocity servo** (default): each sub-step commands q̇_cmd, and the servo drives the
-  joint's velocity toward it with time constant T (:func:`.mujoco_model.set_servo_gains`);
-- **position servo**: each sub-step moves the reference q_ref by q̇_cmd times the sub-step,
-  from the reference of the sub-step before (not from the measured q, which lags: starting
-  each advance from the measured q would lose the lag every time, an effective gain of
-  about 0.8/s for a commanded 2/s in the design's prototype), within the position limits;
-  the servo pulls q toward q_ref, critically damped with time constant T.
+- each sub-step moves the reference q_ref by q̇_cmd times the sub-step, from the reference of
+  the sub-step before (not from the measured q, which lags: starting each advance from the
+  measured q would lose the lag every time, an effective gain of about 0.8/s for a commanded
+  2/s in the design's prototype), within the position limits;
+- **velocity servo** (default): the PI loop drives q̇ toward q̇_cmd and, through its
+  integral, q toward q_ref (:func:`.mujoco_model.set_servo_gains`: critically damped, time
+  constant T);
+- **position servo**: the servo pulls q toward q_ref, critically damped with time constant T.
 
 The measurement is MuJoCo's qpos and qvel at the end of the advance, in Pinocchio's layout.
 """
@@ -121,15 +122,17 @@ class MujocoPlant(Plant):
         self.data = mujoco.MjData(self.model)
         self.layout = joint_layout(robot, self.model)
         self.inertia = set_servo_gains(mujoco, self.model, self.layout, robot.home(), actuator, self.time_constant)
-        self.name = f"MuJoCo {mujoco.__version__}, {actuator} servos (T = {self.time_constant * 1e3:g} ms)"
-        forces = self.model.actuator_forcerange[self.layout.actuator]
-        limited = self.model.actuator_forcelimited[self.layout.actuator].astype(bool)
-        self._force_limit = np.where(limited, np.abs(forces[:, 1]), math.inf)
+        kind = "PI velocity" if actuator == "velocity" else "position"
+        self.name = f"MuJoCo {mujoco.__version__}, {kind} servos (T = {self.time_constant * 1e3:g} ms)"
+        joints = self.model.dof_jntid[self.layout.qvel]
+        limited = self.model.jnt_actfrclimited[joints].astype(bool)
+        self._force_limit = np.where(limited, np.abs(self.model.jnt_actfrcrange[joints, 1]), math.inf)
+        # The actuators whose command is q_ref: the velocity servo's integral, or the position servo.
+        self._referenced = self.layout.integral if actuator == "velocity" else self.layout.actuator
         speeds = np.array(robot.model.velocityLimit, dtype=float)
         speeds = np.where(np.isfinite(speeds) & (speeds > 0), speeds, UNLIMITED_SPEED)
         # A servo of time constant T moving at q̇ comes to rest about q̇ T past where its command stopped.
         self.limit_tolerance = self.time_constant * speeds + LIMIT_SOFTNESS
-        self._reference = np.zeros(self.model.nu)
         self._time = 0.0
         self.reset(robot.home())
 
@@ -138,8 +141,8 @@ class MujocoPlant(Plant):
         q = self.robot.check_q(q)
         mujoco.mj_resetData(self.model, data)
         data.qpos[:] = self.layout.to_mujoco(q)
-        self._reference[self.layout.actuator] = data.qpos[self.layout.qpos]
-        data.ctrl[:] = self._reference if self.actuator == "position" else 0.0
+        data.ctrl[:] = 0.0
+        data.ctrl[self._referenced] = data.qpos[self.layout.qpos]
         mujoco.mj_forward(self.model, data)
         self._time = 0.0
         return self._measure(())
@@ -153,16 +156,14 @@ class MujocoPlant(Plant):
         saturated = np.zeros(layout.actuator.size, dtype=bool)
         if self.actuator == "velocity":
             data.ctrl[layout.actuator] = command
-        lower, upper = model.actuator_ctrlrange[layout.actuator].T
-        bounded = model.actuator_ctrllimited[layout.actuator].astype(bool)
+        referenced = self._referenced
+        lower, upper = model.actuator_ctrlrange[referenced].T
+        bounded = model.actuator_ctrllimited[referenced].astype(bool)
         for _ in range(substeps):
-            if self.actuator == "position":
-                reference = self._reference[layout.actuator] + command * model.opt.timestep
-                reference = np.where(bounded, np.clip(reference, lower, upper), reference)
-                self._reference[layout.actuator] = reference
-                data.ctrl[layout.actuator] = reference
+            reference = data.ctrl[referenced] + command * model.opt.timestep
+            data.ctrl[referenced] = np.where(bounded, np.clip(reference, lower, upper), reference)
             mujoco.mj_step(model, data)
-            saturated |= np.abs(data.actuator_force[layout.actuator]) >= self._force_limit * (1.0 - 1e-9)
+            saturated |= np.abs(data.qfrc_actuator[layout.qvel]) >= self._force_limit * (1.0 - 1e-9)
         self._time += seconds
         if not np.isfinite(data.qpos).all() or not np.isfinite(data.qvel).all():
             raise PlantError(
