@@ -31,7 +31,8 @@ def test_demo_on_position_servos_converges(capsys):
     ("arguments", "message"),
     [
         (["--plot", "x.png"], "--plot draws the measured joint rates of a plant: add --plant mujoco"),
-        (["--actuator", "position"], "--actuator chooses the MuJoCo plant's servos: add --plant mujoco"),
+        (["--actuator", "position"], "--actuator is an option of the MuJoCo plant: add --plant mujoco"),
+        (["--missing-mass", "2"], "--missing-mass is an option of the MuJoCo plant: add --plant mujoco"),
         (["--plant", "bullet"], "invalid choice: 'bullet'"),
     ],
 )
@@ -43,4 +44,5 @@ def test_plant_options_that_do_not_fit_are_one_line(arguments, message, capsys):
 def test_a_robot_without_inertias_is_one_line_naming_the_repair(capsys):
     assert main(["demo", "barker_arm", "--no-viewer", "--plant", "mujoco"]) == 2
     err = capsys.readouterr().err
-    assert "no <inertial> in the URDF" in err and "Traceback" not in err
+    assert "no <inertial> in the URDF" in err and "--missing-mass KG" in err and "Traceback" not in err
+    assert main(["demo", "barker_arm", "--no-viewer", "--plant", "mujoco", "--missing-mass", "2"]) == 0

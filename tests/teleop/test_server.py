@@ -364,3 +364,23 @@ def test_with_no_page_a_command_from_python_drives_the_robot(server):
         time.sleep(0.02)
     assert not np.array_equal(server.snapshot()[0], start)
     assert not server.teleop.dead_man
+
+
+def test_a_plant_in_the_console_keeps_to_the_wall_clock(ur5, tmp_path):
+    """Each tick advances the plant by the controller's dt and the loop runs its missed ticks,
+    so the simulated time follows the wall clock: within 20 % over a second of driving (a
+    loaded 2-core machine drops at most what the loop's catch-up rule drops), never ahead
+    of it by more than a tick."""
+    pytest.importorskip("mujoco")
+    from pinrate.plants import MujocoPlant
+
+    teleop = pinrate.Teleop(ur5, dt=0.002, timeout=0.3, plant=MujocoPlant(ur5))
+    with TeleopServer(teleop, record_dir=tmp_path) as running:
+        simulated, began = running.teleop.measurement.time, time.monotonic()
+        while time.monotonic() - began < 1.0:
+            running.teleop.command([0.5, 0, 0], [0, 0, 0])
+            time.sleep(0.02)
+        simulated, elapsed = running.teleop.measurement.time - simulated, time.monotonic() - began
+        moved = running.teleop.measurement.joint_rates.any()
+    assert 0.8 * elapsed <= simulated <= elapsed + 0.002
+    assert moved and not running.teleop.halted

@@ -189,6 +189,12 @@ def add_plant_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--actuator", default="velocity", choices=ACTUATORS, help="the MuJoCo plant's joint servos (default velocity)"
     )
+    parser.add_argument(
+        "--missing-mass",
+        type=positive,
+        metavar="KG",
+        help="the MuJoCo plant's mass for each moving link the URDF gives none (a 5 cm sphere at its joint)",
+    )
 
 
 def _teleop(teleop: argparse.ArgumentParser) -> None:

@@ -52,9 +52,10 @@ def make_plant(robot: Robot, args: argparse.Namespace) -> Plant | None:
     """``--plant`` and ``--actuator``: None for the kinematic robot (the loops' own
     integration), else a :class:`~pinrate.plants.MujocoPlant` of ``robot``; says which."""
     if args.plant == "kinematic":
-        if args.actuator != "velocity":
-            raise InputError("--actuator chooses the MuJoCo plant's servos: add --plant mujoco")
+        if args.actuator != "velocity" or args.missing_mass is not None:
+            option = "--actuator" if args.actuator != "velocity" else "--missing-mass"
+            raise InputError(f"{option} is an option of the MuJoCo plant: add --plant mujoco")
         return None
-    plant = MujocoPlant(robot, actuator=args.actuator)
+    plant = MujocoPlant(robot, actuator=args.actuator, missing_mass=args.missing_mass)
     print(f"plant      {plant.name}, timestep {plant.timestep * 1e3:g} ms")
     return plant

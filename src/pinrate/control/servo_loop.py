@@ -63,6 +63,7 @@ from .controller import (
     MAX_LINEAR_SPEED,
     Controller,
 )
+from .measured import onto_limits
 from .servo_run import DIVERGENCE_FACTOR, STALL_IMPROVEMENT, ServoRun
 from .trajectory import Trajectory
 
@@ -177,6 +178,11 @@ def servo(
     elif controller.robot is not robot:
         raise InputError("the controller was built for another Robot object: servo it on that one")
     q = robot.check_q(q0)
+    if plant is not None:  # a plant's last measurement may sit past a limit by its tolerance
+        plant = _check_plant(plant, robot)
+        q, beyond = onto_limits(controller, q, plant.limit_tolerance)
+        if beyond:
+            raise InputError(f"q0 is past a position limit by more than the plant's tolerance: {beyond}")
     controller.check_inside_limits(q)
     goal = PoseGoal.of(target, gain)
     tol = check_positive(tol, "tol")
@@ -195,10 +201,6 @@ def servo(
     stall_steps = math.ceil(min(stall_time / controller.dt, STALL_MAX_STEPS))
     run = ServoRun(controller, goal, q, tol, stall_steps, max_steps)
     if plant is not None:
-        if not isinstance(plant, Plant):
-            raise InputError(f"plant must be a pinrate.plants.Plant, not {type(plant).__name__}")
-        if plant.robot is not robot:
-            raise InputError("the plant was built for another Robot object: servo it on that one")
         run.on_plant(plant)
         return run.trajectory()
     core = controller.compiled()
@@ -207,6 +209,15 @@ def servo(
     else:
         run.compiled(core)
     return run.trajectory()
+
+
+def _check_plant(plant: object, robot: Robot) -> Plant:
+    """``plant`` when it is a :class:`~pinrate.plants.Plant` of ``robot``; InputError otherwise."""
+    if not isinstance(plant, Plant):
+        raise InputError(f"plant must be a pinrate.plants.Plant, not {type(plant).__name__}")
+    if plant.robot is not robot:
+        raise InputError("the plant was built for another Robot object: servo it on that one")
+    return plant
 
 
 __all__ = [

@@ -28,8 +28,10 @@ The gains are set per joint from the joint space inertia at the model's home con
 robot's size. The URDF's effort limit, where it gives one, bounds the joint's total actuator
 force (the joint's ``actfrcrange``); its velocity limit bounds the velocity command.
 
-Gravity acts (0, 0, -9.81 m/s² in the world), and by default the drives compensate it
-(``gravcomp`` on every body, as a real arm's joint controllers do); the integrator is
+A URDF inertia that breaks the triangle inequality (not a rigid body's, as on the xArm5's
+second link) is balanced by MuJoCo (``balanceinertia``). Gravity acts (0, 0, -9.81 m/s² in
+the world), and by default the drives compensate it (``gravcomp`` on every body, as a real
+arm's joint controllers do); the integrator is
 ``implicitfast`` (the velocity servo's damping taken implicitly: with MuJoCo's default
 explicit Euler the panda's light fingers diverged in the design's prototype). Contacts are
 off: the plant simulates the arm's joint dynamics, and self-collision is the controller's
@@ -135,12 +137,16 @@ def build_spec(
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
     spec.compiler.autolimits = True
     spec.compiler.degree = False  # joint ranges in radians, as the URDF gives them
+    # An inertia that breaks the triangle inequality (A + B >= C; xArm5's URDF has one) is
+    # not a rigid body's: MuJoCo then raises its smallest moment to the bound, as it may.
+    spec.compiler.balanceinertia = True
     massless = [model.names[index] for index in range(1, model.njoints) if model.inertias[index].mass < MIN_MASS]
     if massless and missing_mass is None:
         raise PlantError(
             f"robot {robot.name!r}: MuJoCo needs a mass on every moving body, and the links moved by "
             f"{', '.join(massless)} have none (no <inertial> in the URDF): add <inertial> elements, or "
-            "pass missing_mass=<kg> to give each such body that mass (a 5 cm solid sphere at its joint)"
+            "give each such body a mass as a 5 cm solid sphere at its joint (MujocoPlant(missing_mass=kg); "
+            "pinrate demo/teleop: --missing-mass KG)"
         )
     bodies: dict[int, Any] = {0: spec.worldbody}
     for index in range(1, model.njoints):

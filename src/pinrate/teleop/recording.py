@@ -93,16 +93,17 @@ class Recording:
         """Keep ``q`` (a copy) as the configuration before the first tick."""
         self.start = np.array(q, dtype=float)
 
-    def add(self, time: float, step: Step) -> None:
+    def add(self, time: float, step: Step, q: np.ndarray | None = None) -> None:
         """Keep one tick at ``time`` (s; one earlier than the newest tick's is kept at the
-        newest's, so ``times`` never decreases), copying the step's q and rates; the oldest
-        tick goes when ``max_samples`` are held. InputError for a time that is not finite."""
+        newest's, so ``times`` never decreases), copying ``q`` (default: the step's; a
+        plant's measurement after it) and the step's rates; the oldest tick goes when
+        ``max_samples`` are held. InputError for a time that is not finite."""
         stamp = float(time)
         if not math.isfinite(stamp):
             raise InputError(f"a tick's time must be finite, got {stamp}")
         if self._ticks and stamp < self._ticks[-1][0]:
             stamp = self._ticks[-1][0]
-        q = np.array(step.q, dtype=float)
+        q = np.array(step.q if q is None else q, dtype=float)
         rates = np.array(step.joint_rates, dtype=float)
         self._ticks.append((stamp, q, rates, step.status.word, step.detail))
 

@@ -340,8 +340,8 @@ class Teleop:
         else:
             step = self._operator_step(held)
         self.last = step
-        if self._recording is not None:
-            self._recording.add(stamp, step)
+        if self._recording is not None:  # what the plant measured, when there is one
+            self._recording.add(stamp, step, None if self.measurement is None else self.measurement.q)
         return step
 
     def _operator_step(self, held: Held) -> Step:
