@@ -46,3 +46,10 @@ def test_a_robot_without_inertias_is_one_line_naming_the_repair(capsys):
     err = capsys.readouterr().err
     assert "no <inertial> in the URDF" in err and "--missing-mass KG" in err and "Traceback" not in err
     assert main(["demo", "barker_arm", "--no-viewer", "--plant", "mujoco", "--missing-mass", "2"]) == 0
+
+
+def test_one_plot_per_segment(tmp_path, capsys):
+    plot = tmp_path / "rates.png"
+    assert main(["demo", "ur5", "--no-viewer", "--plant", "mujoco", "--targets", "2", "--plot", str(plot)]) == 0
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["rates-1.png", "rates-2.png"]
+    assert capsys.readouterr().out.count("plot       ") == 2

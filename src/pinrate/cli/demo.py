@@ -298,7 +298,8 @@ def demo(args: argparse.Namespace) -> int:
             if plot is not None:
                 from ..analysis.plots import plant_tracking_png  # matplotlib only for a plot
 
-                print(f"plot       {plant_tracking_png(trajectory, robot.joint_names, plot)} (segment {index})")
+                path = plot if count == 1 else plot.with_name(f"{plot.stem}-{index}{plot.suffix}")
+                print(f"plot       {plant_tracking_png(trajectory, robot.joint_names, path)} (segment {index})")
         if viewer is not None:
             if record is not None:
                 _save_record(viewer, record)
