@@ -155,7 +155,7 @@ def _segment(
 ) -> list[Trajectory]:
     """The runs of one segment: the algorithm asked for, or the default and, when it does not
     converge, :data:`FALLBACK_ALGORITHM` from the same start (the last run is the one kept);
-    on ``plant`` when one is given."""
+    on ``plant`` when one is given, with the URDF's velocity limits kept."""
     settings = {
         "partition": partition,
         "dt": args.dt,
@@ -164,6 +164,8 @@ def _segment(
         "tol": args.tol,
         "plant": plant,
     }
+    if plant is not None:  # the drives saturate at the URDF's velocity limits: the controller keeps them
+        settings["velocity_limits"] = None
     runs = [servo(robot, q, target, algorithm=args.algorithm or DEFAULT_ALGORITHM, **settings)]
     if args.algorithm is None and not runs[0].converged:
         runs.append(servo(robot, q, target, algorithm=FALLBACK_ALGORITHM, **settings))

@@ -12,7 +12,8 @@ are independent: n = ceil(duration / timestep) sub-steps of duration / n each):
   2/s in the design's prototype), within the position limits;
 - **velocity servo** (default): the PI loop drives q̇ toward q̇_cmd and, through its
   integral, q toward q_ref (:func:`.mujoco_model.set_servo_gains`: critically damped, time
-  constant T);
+  constant T); the command, and so the reference's rate, saturates at the URDF's velocity
+  limit (a controller that drives it keeps those limits: ``velocity_limits=None``);
 - **position servo**: the servo pulls q toward q_ref, critically damped with time constant T.
 
 The measurement is MuJoCo's qpos and qvel at the end of the advance, in Pinocchio's layout.
@@ -155,6 +156,10 @@ class MujocoPlant(Plant):
         command = rates[layout.idx_v]
         saturated = np.zeros(layout.actuator.size, dtype=bool)
         if self.actuator == "velocity":
+            # The drive's command saturates at the velocity limit, its integral's too.
+            speed_lower, speed_upper = model.actuator_ctrlrange[layout.actuator].T
+            speed_bounded = model.actuator_ctrllimited[layout.actuator].astype(bool)
+            command = np.where(speed_bounded, np.clip(command, speed_lower, speed_upper), command)
             data.ctrl[layout.actuator] = command
         referenced = self._referenced
         lower, upper = model.actuator_ctrlrange[referenced].T
