@@ -233,9 +233,11 @@ def _add_joint(mujoco: Any, body: Any, robot: Robot, index: int) -> Any:
 
 def _add_servo(mujoco: Any, spec: Any, joint: Any, robot: Robot, index: int, kind: str) -> None:
     """Joint ``index``'s servo (``joint``: its MuJoCo joint): ``kind`` ``"velocity"`` (a
-    velocity actuator, its command bounded by the velocity limit, and the integral: a
-    position actuator on q_ref) or ``"position"`` (one position actuator on q_ref); q_ref
-    bounded by the position limits, the joint's total actuator force by the effort limit."""
+    velocity actuator and the integral, a position actuator on q_ref) or ``"position"`` (a
+    position actuator on q_ref), every command q̇_cmd bounded by the velocity limit. q_ref is
+    the actuator's own activation, which MuJoCo integrates from the command (an
+    ``intvelocity`` actuator: act' = q̇_cmd, taken the sub-step it changes, ``actearly``),
+    bounded by the position limits; the joint's total actuator force by the effort limit."""
     model = robot.model
     pinocchio_joint = model.joints[index]
     effort = float(model.effortLimit[pinocchio_joint.idx_v])
@@ -243,19 +245,22 @@ def _add_servo(mujoco: Any, spec: Any, joint: Any, robot: Robot, index: int, kin
         joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
         joint.actfrcrange = [-effort, effort]
     name = model.names[index]
-    if kind == "velocity":
-        velocity = _add_actuator(mujoco, spec, name, name)
-        speed = float(model.velocityLimit[pinocchio_joint.idx_v])
-        if np.isfinite(speed) and speed > 0:
-            velocity.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
-            velocity.ctrlrange = [-speed, speed]
+    speed = float(model.velocityLimit[pinocchio_joint.idx_v])
+    actuators = [_add_actuator(mujoco, spec, name, name)] if kind == "velocity" else []
     reference = _add_actuator(mujoco, spec, f"{name} integral" if kind == "velocity" else name, name)
+    actuators.append(reference)
+    reference.dyntype = mujoco.mjtDyn.mjDYN_INTEGRATOR
+    reference.actearly = True
+    if np.isfinite(speed) and speed > 0:
+        for actuator in actuators:
+            actuator.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            actuator.ctrlrange = [-speed, speed]
     if pinocchio_joint.nq == 1:
         q_index = pinocchio_joint.idx_q
         lower, upper = float(model.lowerPositionLimit[q_index]), float(model.upperPositionLimit[q_index])
         if np.isfinite(lower) and np.isfinite(upper) and lower < upper:
-            reference.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
-            reference.ctrlrange = [lower, upper]
+            reference.actlimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            reference.actrange = [lower, upper]
 
 
 def _add_actuator(mujoco: Any, spec: Any, name: str, joint: str) -> Any:
@@ -302,7 +307,8 @@ def set_servo_gains(
 
 
 def _set_gains(mj_model: Any, actuator: int, gain: float, stiffness: float, damping: float) -> None:
-    """force = gain ctrl - stiffness q - damping q̇ (MuJoCo's fixed gain and affine bias)."""
+    """force = gain u - stiffness q - damping q̇, u the actuator's command, or its activation
+    q_ref when it has one (MuJoCo's fixed gain and affine bias)."""
     mj_model.actuator_gainprm[actuator, 0] = gain
     mj_model.actuator_biasprm[actuator, :3] = (0.0, -stiffness, -damping)
 

@@ -9,7 +9,8 @@ are independent: n = ceil(duration / timestep) sub-steps of duration / n each):
 - each sub-step moves the reference q_ref by q̇_cmd times the sub-step, from the reference of
   the sub-step before (not from the measured q, which lags: starting each advance from the
   measured q would lose the lag every time, an effective gain of about 0.8/s for a commanded
-  2/s in the design's prototype), within the position limits;
+  2/s in the design's prototype), within the position limits: MuJoCo integrates it, as the
+  activation of an ``intvelocity`` actuator;
 - **velocity servo** (default): the PI loop drives q̇ toward q̇_cmd and, through its
   integral, q toward q_ref (:func:`.mujoco_model.set_servo_gains`: critically damped, time
   constant T); the command, and so the reference's rate, saturates at the URDF's velocity
@@ -127,9 +128,12 @@ class MujocoPlant(Plant):
         self.name = f"MuJoCo {mujoco.__version__}, {kind} servos (T = {self.time_constant * 1e3:g} ms)"
         joints = self.model.dof_jntid[self.layout.qvel]
         limited = self.model.jnt_actfrclimited[joints].astype(bool)
-        self._force_limit = np.where(limited, np.abs(self.model.jnt_actfrcrange[joints, 1]), math.inf)
-        # The actuators whose command is q_ref: the velocity servo's integral, or the position servo.
-        self._referenced = self.layout.integral if actuator == "velocity" else self.layout.actuator
+        # A joint's actuator force at its effort limit, to rounding (1e-9 relative): saturated.
+        self._force_limit = np.where(limited, np.abs(self.model.jnt_actfrcrange[joints, 1]) * (1.0 - 1e-9), math.inf)
+        self._force_limited = bool(limited.any())
+        # Where q_ref lives: the activation of the velocity servo's integral, or of the position servo.
+        referenced = self.layout.integral if actuator == "velocity" else self.layout.actuator
+        self._reference_state = self.model.actuator_actadr[referenced]
         speeds = np.array(robot.model.velocityLimit, dtype=float)
         speeds = np.where(np.isfinite(speeds) & (speeds > 0), speeds, UNLIMITED_SPEED)
         # A servo of time constant T moving at q̇ comes to rest about q̇ T past where its command stopped.
@@ -142,8 +146,7 @@ class MujocoPlant(Plant):
         q = self.robot.check_q(q)
         mujoco.mj_resetData(self.model, data)
         data.qpos[:] = self.layout.to_mujoco(q)
-        data.ctrl[:] = 0.0
-        data.ctrl[self._referenced] = data.qpos[self.layout.qpos]
+        data.act[self._reference_state] = data.qpos[self.layout.qpos]  # q_ref starts where q is
         mujoco.mj_forward(self.model, data)
         self._time = 0.0
         return self._measure(())
@@ -154,21 +157,16 @@ class MujocoPlant(Plant):
         substeps = max(1, math.ceil(seconds / self.timestep - 1e-9))
         model.opt.timestep = seconds / substeps
         command = rates[layout.idx_v]
-        saturated = np.zeros(layout.actuator.size, dtype=bool)
+        data.ctrl[layout.actuator] = command  # MuJoCo bounds it by the velocity limit
         if self.actuator == "velocity":
-            # The drive's command saturates at the velocity limit, its integral's too.
-            speed_lower, speed_upper = model.actuator_ctrlrange[layout.actuator].T
-            speed_bounded = model.actuator_ctrllimited[layout.actuator].astype(bool)
-            command = np.where(speed_bounded, np.clip(command, speed_lower, speed_upper), command)
-            data.ctrl[layout.actuator] = command
-        referenced = self._referenced
-        lower, upper = model.actuator_ctrlrange[referenced].T
-        bounded = model.actuator_ctrllimited[referenced].astype(bool)
-        for _ in range(substeps):
-            reference = data.ctrl[referenced] + command * model.opt.timestep
-            data.ctrl[referenced] = np.where(bounded, np.clip(reference, lower, upper), reference)
-            mujoco.mj_step(model, data)
-            saturated |= np.abs(data.qfrc_actuator[layout.qvel]) >= self._force_limit * (1.0 - 1e-9)
+            data.ctrl[layout.integral] = command  # the integral's q_ref moves at the same rate
+        saturated = np.zeros(layout.actuator.size, dtype=bool)
+        if self._force_limited:  # looked at after every sub-step
+            for _ in range(substeps):
+                mujoco.mj_step(model, data)
+                saturated |= np.abs(data.qfrc_actuator[layout.qvel]) >= self._force_limit
+        else:
+            mujoco.mj_step(model, data, nstep=substeps)
         self._time += seconds
         if not np.isfinite(data.qpos).all() or not np.isfinite(data.qvel).all():
             raise PlantError(
