@@ -46,9 +46,9 @@ def imported_top_level_modules() -> set[str]:
     return modules - set(sys.stdlib_module_names) - {"pinrate", "pinrate_core", "__future__"}
 
 
-OPTIONAL = {"dask", "distributed", "xacro", "xacrodoc"}
-"""Imported only behind ``pip install 'pinrate[dask]'`` and ``'pinrate[xacro]'`` (an error naming
-the extra otherwise)."""
+OPTIONAL = {"dask", "distributed", "xacro", "xacrodoc", "mujoco"}
+"""Imported only behind ``pip install 'pinrate[dask]'``, ``'pinrate[xacro]'`` and
+``'pinrate[mujoco]'`` (an error naming the extra otherwise)."""
 
 
 def test_one_version() -> None:
@@ -81,7 +81,7 @@ def test_every_imported_package_is_declared() -> None:
             missing.append(f"{module} (from {', '.join(sorted(distributions))})")
     assert not missing, f"imported but not declared in [project] dependencies: {missing}"
     extras = importlib.metadata.metadata("pinrate").get_all("Provides-Extra") or []
-    assert "dask" in extras
+    assert {"dask", "xacro", "mujoco"} <= set(extras)
 
 
 def test_licence() -> None:
