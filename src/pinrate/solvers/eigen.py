@@ -66,10 +66,14 @@ def _array_choose(condition: np.ndarray, if_true: Callable[[], Any], if_false: C
     return np.where(condition, if_true(), if_false())
 
 
-FLOATS = Ops(math.sqrt, _float_cbrt, math.acos, math.cos, math.sin, math.hypot, max, min, _float_where, abs, _float_choose)
+FLOATS = Ops(
+    math.sqrt, _float_cbrt, math.acos, math.cos, math.sin, math.hypot, max, min, _float_where, abs, _float_choose
+)
 """Python floats: one matrix."""
 
-ARRAYS = Ops(np.sqrt, np.cbrt, np.arccos, np.cos, np.sin, np.hypot, np.maximum, np.minimum, np.where, np.abs, _array_choose)
+ARRAYS = Ops(
+    np.sqrt, np.cbrt, np.arccos, np.cos, np.sin, np.hypot, np.maximum, np.minimum, np.where, np.abs, _array_choose
+)
 """numpy arrays: elementwise over a stack of matrices."""
 
 
