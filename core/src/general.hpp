@@ -1,11 +1,13 @@
-// The block algebra of pinrate.solvers.reference for blocks of any shape (a 7-DOF arm's 3x4
-// A, a 4-DOF arm's 3x1 W), on Eigen: pseudo-inverses and eigenvalues where the closed forms
-// of closed_form.hpp do not apply. numpy's LAPACK and Eigen's SVD round differently, so the
-// two paths agree here to about 1e-15 relative, not to the bit.
+// The block algebra of pinrate.solvers.reference (the servo's rates) and of
+// pinrate.solvers.batched (rho) for blocks of any shape (a 7-DOF arm's 3x4 A, a 4-DOF arm's
+// 3x1 W), on Eigen: pseudo-inverses where the closed forms of closed_form.hpp do not apply.
+// numpy's LAPACK and these factorizations round differently, so the two paths agree here to
+// about 1e-15 relative times the blocks' conditioning, not to the bit.
 #pragma once
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <stdexcept>
 
 #include "closed_form.hpp"
 
@@ -124,8 +126,9 @@ bool full_rank_pinv(const M &A, double rcond, M &out) {
   return true;
 }
 
-// batched.inverse, one block: the adjugate of a square block up to 3x3 (closed_form.inverse),
-// LU above, M^+ of a rectangular one, zeros of an empty one. Throws Singular.
+// batched.inverse, one block: the adjugate of a square block (closed_form.inverse; A and W
+// have at most 3 rows, so a square one is at most 3x3), M^+ of a rectangular one, zeros of an
+// empty one. Throws Singular.
 template <typename M>
 M map_inverse(const M &A, const char *block, double rcond) {
   if (A.rows() == 0 || A.cols() == 0) return M::Zero(A.cols(), A.rows());
@@ -140,22 +143,16 @@ M map_inverse(const M &A, const char *block, double rcond) {
     return V * svd.matrixU().transpose();
   }
   const int n = static_cast<int>(A.rows());
-  if (n <= 3) {
-    Block small, inverted;
-    small.rows = small.cols = n;
-    for (int r = 0; r < n; ++r)
-      for (int c = 0; c < n; ++c) small(r, c) = A(r, c);
-    inverted = inverse(small, block);
-    M out(n, n);
-    for (int r = 0; r < n; ++r)
-      for (int c = 0; c < n; ++c) out(r, c) = inverted(r, c);
-    return out;
-  }
-  Eigen::PartialPivLU<M> lu(A);
-  double scale_squared = 1.0;
-  for (int c = 0; c < n; ++c) scale_squared *= A.col(c).squaredNorm();
-  if (!invertible(lu.determinant(), scale_squared)) throw Singular(block);
-  return lu.inverse();
+  if (n > 3) throw std::invalid_argument("a square block larger than 3x3");
+  Block small;
+  small.rows = small.cols = n;
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) small(r, c) = A(r, c);
+  const Block inverted = inverse(small, block);
+  M out(n, n);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) out(r, c) = inverted(r, c);
+  return out;
 }
 
 // X Y as a Block, for a product of at most 3 x 3 (any inner size): row . column, left to right.
