@@ -234,33 +234,67 @@ inline double spectral_radius_3(const Block &M) {
     const double imaginary_part = (std::sqrt(3.0) / 2.0) * (u - v);
     return py_max(std::fabs(u + v + shift), std::hypot(real_part, imaginary_part));
   }
-  // Viete
+  // Viete: the largest root (k = 0, cos in [1/2, 1]) and the smallest (k = 2, cos(angle + 2 pi / 3)
+  // by the angle sum) bracket the middle one, so rho is the larger of their two magnitudes.
   const bool flat = p >= -kFlat;
   if (flat) return std::fabs(shift);
   const double radius = 2.0 * std::sqrt(-p * (1.0 / 3.0));
   const double angle = std::acos(py_max(-1.0, py_min(1.0, 3.0 * q / (p * radius)))) * (1.0 / 3.0);
-  const double two_pi_thirds = 2.0 * M_PI / 3.0;
-  const double first = std::fabs(radius * std::cos(angle - 0 * two_pi_thirds) + shift);
-  const double last = std::fabs(radius * std::cos(angle - 2 * two_pi_thirds) + shift);
-  // The middle root's cosine (argument in [-2 pi / 3, -pi / 3], to rounding) is at most 1/2
-  // in size, so that root is at most 0.5 radius + |shift| (the factor covers the roundings).
-  // Where the first or the last root is larger, the middle one cannot be the maximum and
-  // Python's max(first, middle, last) is max(first, last): one cosine saved, the same double.
-  const double ceiling = (0.5 * radius + std::fabs(shift)) * (1.0 + 1e-9);
-  if (first > ceiling || last > ceiling) return py_max(first, last);
-  const double middle = std::fabs(radius * std::cos(angle - 1 * two_pi_thirds) + shift);
-  return py_max(py_max(first, middle), last);
+  const double cosine = std::cos(angle), sine = std::sin(angle);
+  const double largest = radius * cosine + shift;
+  const double smallest = -radius * (0.5 * cosine + (std::sqrt(3.0) / 2.0) * sine) + shift;
+  return py_max(std::fabs(largest), std::fabs(smallest));
 }
+
+// The largest |eigenvalue| of a square Block, 0 of an empty one (closed_form.spectral_radius's end).
+inline double block_radius(const Block &M) {
+  if (M.rows == 3) return spectral_radius_3(M);
+  if (M.rows == 2) return spectral_radius_2(M(0, 0), M(0, 1), M(1, 0), M(1, 1));
+  if (M.rows == 1) return std::fabs(M(0, 0));
+  return 0.0;
+}
+
+// closed_form.blocks for one partition, its indexing done once: where each entry of A, B, U
+// and W sits in J's column-major storage (6 rows), so a map reads 9 doubles per block per q
+// instead of walking the partition's row and column lists.
+struct BlockLayout {
+  std::array<Block, 4> shapes;                // A, B, U, W: rows and cols (values unused)
+  std::array<std::array<int, 9>, 4> offsets{};  // [block][3 r + c]: index into J's data
+
+  BlockLayout() = default;  // no blocks (a partition the closed forms do not take)
+  BlockLayout(const int *rows, const int *columns, int m, int k, int n_arm, int n) {
+    const int spec[4][4] = {{0, m, 0, n_arm}, {0, m, n_arm, n - n_arm}, {m, k, 0, n_arm}, {m, k, n_arm, n - n_arm}};
+    for (int b = 0; b < 4; ++b) {
+      shapes[b].rows = spec[b][1];
+      shapes[b].cols = spec[b][3];
+      offsets[b].fill(0);
+      for (int r = 0; r < spec[b][1]; ++r)
+        for (int c = 0; c < spec[b][3]; ++c) offsets[b][3 * r + c] = 6 * columns[spec[b][2] + c] + rows[spec[b][0] + r];
+    }
+  }
+
+  // A, B, U, W of the J whose column-major data starts at `jacobian`; a 3x3 block in one sweep.
+  void gather(const double *jacobian, Block &A, Block &B, Block &U, Block &W) const {
+    Block *out[4] = {&A, &B, &U, &W};
+    for (int b = 0; b < 4; ++b) {
+      Block &M = *out[b];
+      M.rows = shapes[b].rows;
+      M.cols = shapes[b].cols;
+      if (M.rows == 3 && M.cols == 3) {
+        for (int t = 0; t < 9; ++t) M.v[t] = jacobian[offsets[b][t]];
+        continue;
+      }
+      for (int r = 0; r < M.rows; ++r)
+        for (int c = 0; c < M.cols; ++c) M.v[3 * r + c] = jacobian[offsets[b][3 * r + c]];
+    }
+  }
+};
 
 // closed_form.spectral_radius: rho of the smaller of G = U A^-1 B W^-1 and H (eq. 32, 50).
 inline double spectral_radius(const Block &A, const Block &B, const Block &U, const Block &W) {
   const Block P = matmul(U, inverse(A, "A"));  // k x m
   const Block Q = matmul(B, inverse(W, "W"));  // m x k
-  const Block M = P.rows <= Q.rows ? matmul(P, Q) : matmul(Q, P);
-  if (M.rows == 3) return spectral_radius_3(M);
-  if (M.rows == 2) return spectral_radius_2(M(0, 0), M(0, 1), M(1, 0), M(1, 1));
-  if (M.rows == 1) return std::fabs(M(0, 0));
-  return 0.0;
+  return block_radius(P.rows <= Q.rows ? matmul(P, Q) : matmul(Q, P));
 }
 
 // conditioning.inverse_condition_bound on nested lists: 1 / (||M||_F ||M^-1||_F).

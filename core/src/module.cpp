@@ -419,19 +419,45 @@ std::size_t checked_count(const Servo &servo, const Array<const double> &configu
 }
 
 // rho at each configuration (N, nq) into radii (N,), over `threads` threads; the servo's
-// settings give the partition. Per q: J (the map's kinematics pass), the blocks straight from
-// it, the closed forms; nothing allocated on the closed-form path.
+// settings give the partition. Per q: J (the map's kinematics pass), the blocks read straight
+// from J's storage at offsets found once, the closed forms (general.hpp's on the stack for a
+// partition of up to kCapped joints); nothing allocated per q.
 void spectral_radius_at(Servo &servo, Array<const double> configurations, Array<double> radii, long threads) {
   const std::size_t count = checked_count(servo, configurations, threads);
   if (radii.size() != count) throw std::invalid_argument("radii must be (N,)");
   const double *source = configurations.data();
   double *out = radii.data();
   const int nq = servo.kinematics().nq();
+  const Settings &s = servo.settings();
+  const int n = static_cast<int>(s.columns.size()), m = s.m, k = static_cast<int>(s.rows.size()) - s.m;
+  const bool capped = !s.small && n <= kCapped;
+  const BlockLayout layout = s.small ? BlockLayout(s.rows.data(), s.columns.data(), m, k, s.n_arm, n) : BlockLayout();
   over_chunks(servo, count, threads,
               [&](Kinematics &kinematics, const Servo &mapper, std::size_t begin, std::size_t end) {
+                Blocks b;
+                const int n_wrist = n - s.n_arm;
+                Capped A(m, s.n_arm), B(m, n_wrist), U(k, s.n_arm), W(k, n_wrist);  // sized once
                 for (std::size_t i = begin; i < end; ++i) {
                   kinematics.compute_jacobian(Eigen::Map<const Vector>(source + i * nq, nq));
-                  out[i] = mapper.radius_here();
+                  const double *J = kinematics.jacobian.data();  // column-major, 6 rows
+                  if (s.small) {
+                    layout.gather(J, b.A, b.B, b.U, b.W);
+                    out[i] = Servo::radius_of(b);
+                  } else if (capped) {
+                    for (int c = 0; c < n; ++c) {
+                      const double *column = J + 6 * s.columns[c];
+                      for (int r = 0; r < m + k; ++r) {
+                        const double value = column[s.rows[r]];
+                        if (c < s.n_arm)
+                          (r < m ? A(r, c) : U(r - m, c)) = value;
+                        else
+                          (r < m ? B(r, c - s.n_arm) : W(r - m, c - s.n_arm)) = value;
+                      }
+                    }
+                    out[i] = block_spectral_radius<Capped>(A, B, U, W, s.pinv_rcond);
+                  } else {
+                    out[i] = mapper.radius_here();
+                  }
                 }
               });
 }

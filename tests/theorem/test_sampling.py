@@ -4,6 +4,8 @@ operations made on it, so every thread count gives the single-threaded map bit f
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -58,7 +60,8 @@ def test_workers_reach_the_core_and_chunks_do_not_change_the_map(monkeypatch: py
 @pytest.mark.parametrize("name", ["ur5", "panda"])
 def test_threaded_map_agrees_with_the_python_path(name: str) -> None:
     """On two threads against the batched numpy path: the same formulas in another order of
-    a few roundings (ur5), or Eigen's SVD against LAPACK's (panda's 3x4 A), so ρ within
+    a few roundings (ur5), or a Gram-Schmidt pseudo-inverse against LAPACK's SVD (panda's
+    3x4 A), so ρ within
     support.spectral_radius_tolerance (the bound test_rho_maps_agree uses), inf alike."""
     robot = pinrate.load(name)
     configurations = robot.sample_configurations(3000, 8)
@@ -70,6 +73,63 @@ def test_threaded_map_agrees_with_the_python_path(name: str) -> None:
     finite = np.isfinite(python)
     tolerance = spectral_radius_tolerance(robot, pinrate.Partition.auto(robot), configurations[finite])
     assert np.all(np.abs(compiled[finite] - python[finite]) <= tolerance)
+
+
+def _joint(index: int, axis: str, parent: str, child: str, z: float) -> str:
+    return (
+        f'<joint name="j{index}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+        f'<origin xyz="0 0 {z}"/><axis xyz="{axis}"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+    )
+
+
+# Seven joints straight up at q = 0: j1 and j3 turn about the vertical line through the tip,
+# j2 and j4 about parallel horizontal axes, so the 3x4 A has rank 1 there; a spherical wrist
+# (j5, j6, j7 about z, y, x at one point, the tip 0.1 above it) with a regular W and B != 0.
+_LINKS = ["base", *(f"l{i}" for i in range(1, 8))]
+_AXES = ["0 0 1", "0 1 0", "0 0 1", "0 1 0", "0 0 1", "0 1 0", "1 0 0"]
+_OFFSETS = [0.3, 0.3, 0.3, 0.3, 0.3, 0.0, 0.0]
+STRAIGHT_ARM = (
+    '<robot name="straight">'
+    + "".join(f'<link name="{link}"/>' for link in [*_LINKS, "tip"])
+    + "".join(_joint(i + 1, _AXES[i], _LINKS[i], _LINKS[i + 1], _OFFSETS[i]) for i in range(7))
+    + '<joint name="tool" type="fixed"><parent link="l7"/><child link="tip"/><origin xyz="0 0 0.1"/></joint>'
+    + "</robot>"
+)
+
+
+def test_a_wide_a_near_rank_loss_takes_the_svd_and_agrees(tmp_path: Path) -> None:
+    """The core pseudo-inverts a wide A by Gram-Schmidt only where ||R||_F ||R^-1||_F < 1e8
+    (numpy's pinv, rcond 1e-10, would then truncate nothing), else by the SVD. An elbow bent
+    by 1e-9 to 1e-6 rad from straight gives sigma_min / sigma_max of 2e-10 to 2e-7 (both ways
+    taken), straight gives rank 1 (pinv truncates). ρ within support.spectral_radius_tolerance
+    of the Python path's where A has full rank, NaN nowhere; at rank 1 both keep sigma_1 alone
+    (the others below 1e-15 sigma_1, far from the cutoff), so their G differ by rounding,
+    under 100 eps g with g = ||U|| ||A^+|| ||B|| ||W^-1||, and their ρ by at most Elsner's
+    (2 g)^(2/3) (100 eps g)^(1/3) (support.spectral_radius_tolerance's bound, n = 3)."""
+    urdf = tmp_path / "straight.urdf"
+    urdf.write_text(STRAIGHT_ARM, encoding="utf-8")
+    robot = pinrate.load(urdf)
+    partition = pinrate.Partition.auto(robot)
+    assert (len(partition.arm), len(partition.wrist)) == (4, 3)
+    configurations = np.zeros((5, robot.nq))
+    configurations[:, 3] = [0.0, 1e-9, 1e-8, 1e-7, 1e-6]  # j4, the elbow
+    J = np.stack([robot.jacobian(q) for q in configurations])
+    A, B, U, W = J[:, :3, :4], J[:, :3, 4:], J[:, 3:, :4], J[:, 3:, 4:]
+    singular_values = np.linalg.svd(A, compute_uv=False)
+    ratios = singular_values[:, -1] / singular_values[:, 0]
+    assert ratios[0] < 1e-15 and np.all((ratios[1:] > 1e-10) & (ratios[1:] < 1e-6))
+    with path("python"):
+        python = spectral_radius_at(robot, configurations, partition=partition)
+    with path("compiled"):
+        assert rho_map(robot, (0, 1, 2, 3, 4, 5), tuple(range(7)), 3, 4) is not None
+        compiled = spectral_radius_at(robot, configurations, partition=partition)
+    assert np.all(np.isfinite(compiled)) and np.all(np.isfinite(python))
+    tolerance = spectral_radius_tolerance(robot, partition, configurations[1:])
+    assert np.all(np.abs(compiled[1:] - python[1:]) <= tolerance)
+    norm = np.linalg.norm
+    g = norm(U[0], 2) * norm(np.linalg.pinv(A[0], rcond=1e-10), 2) * norm(B[0], 2) * norm(np.linalg.inv(W[0]), 2)
+    eps = np.finfo(float).eps
+    assert abs(compiled[0] - python[0]) <= (2 * g) ** (2 / 3) * (100 * eps * g) ** (1 / 3)
 
 
 def test_the_jacobian_bound_is_timed_and_threads_are_checked() -> None:

@@ -27,7 +27,6 @@ from typing import Any
 import numpy as np
 
 _SQRT3_HALF = math.sqrt(3.0) / 2.0
-_TWO_PI_THIRDS = 2.0 * math.pi / 3.0
 FLAT = 1e-200
 """Viète's cut: a 3x3 whose shifted p >= -FLAT has a triple root (rho is ``|tr M / 3|``); the
 compiled core's ``FLAT`` must be the same (pinrate.compiled checks it at load)."""
@@ -41,6 +40,7 @@ class Ops:
     cbrt: Callable[[Any], Any]
     arccos: Callable[[Any], Any]
     cos: Callable[[Any], Any]
+    sin: Callable[[Any], Any]
     hypot: Callable[[Any, Any], Any]
     maximum: Callable[[Any, Any], Any]
     minimum: Callable[[Any, Any], Any]
@@ -66,10 +66,14 @@ def _array_choose(condition: np.ndarray, if_true: Callable[[], Any], if_false: C
     return np.where(condition, if_true(), if_false())
 
 
-FLOATS = Ops(math.sqrt, _float_cbrt, math.acos, math.cos, math.hypot, max, min, _float_where, abs, _float_choose)
+FLOATS = Ops(
+    math.sqrt, _float_cbrt, math.acos, math.cos, math.sin, math.hypot, max, min, _float_where, abs, _float_choose
+)
 """Python floats: one matrix."""
 
-ARRAYS = Ops(np.sqrt, np.cbrt, np.arccos, np.cos, np.hypot, np.maximum, np.minimum, np.where, np.abs, _array_choose)
+ARRAYS = Ops(
+    np.sqrt, np.cbrt, np.arccos, np.cos, np.sin, np.hypot, np.maximum, np.minimum, np.where, np.abs, _array_choose
+)
 """numpy arrays: elementwise over a stack of matrices."""
 
 
@@ -124,8 +128,12 @@ def spectral_radius_3(m: tuple[Any, ...], ops: Ops) -> Any:
         safe_p = ops.where(one_real | flat, -1.0, p)
         radius = 2.0 * ops.sqrt(-safe_p * (1.0 / 3.0))
         angle = ops.arccos(ops.maximum(-1.0, ops.minimum(1.0, 3.0 * q / (safe_p * radius)))) * (1.0 / 3.0)
-        roots = [radius * ops.cos(angle - k * _TWO_PI_THIRDS) + shift for k in range(3)]
-        largest = ops.maximum(ops.maximum(ops.absolute(roots[0]), ops.absolute(roots[1])), ops.absolute(roots[2]))
-        return ops.where(flat, ops.absolute(shift), largest)
+        # Roots radius cos(angle - 2 pi k / 3) + shift: k = 0 is the largest (cos in [1/2, 1]),
+        # k = 2 the smallest (cos(angle + 2 pi / 3), by the angle sum); the middle one lies
+        # between them, so it is never the largest in magnitude and is not computed.
+        cosine, sine = ops.cos(angle), ops.sin(angle)
+        largest = radius * cosine + shift
+        smallest = -radius * (0.5 * cosine + _SQRT3_HALF * sine) + shift
+        return ops.where(flat, ops.absolute(shift), ops.maximum(ops.absolute(largest), ops.absolute(smallest)))
 
     return ops.choose(one_real, cardano, viete)
