@@ -45,8 +45,9 @@ TIME_CONSTANT = 0.005
 after T; position: critically damped at ω = 1 / T)."""
 
 LIMIT_SOFTNESS = 1e-4
-"""rad or m: how far MuJoCo's joint limit (a stiff spring-damper, solref 0.02 s) lets a joint
-that its servo holds at rest press past it (measured: 1e-5 on the panda's joints)."""
+"""rad or m: how far MuJoCo's joint limit (a stiff stop: a critically damped spring of time
+constant two sub-steps, :mod:`.mujoco_model`) lets a joint its servo holds there press past
+it (measured: 1e-5 on the panda's joints at rest, 2.4e-4 arriving at 2 rad/s)."""
 
 UNLIMITED_SPEED = 3.0
 """rad/s or m/s: the speed assumed for a joint whose URDF gives no velocity limit, in its
