@@ -187,3 +187,21 @@ def test_a_joint_jog_on_the_plant_moves_only_that_joint(ur5):
     elbow = ur5.model.joints[ur5.joint_id("elbow_joint")].idx_q
     assert moved[elbow] > 0.1
     assert np.delete(moved, elbow).max() < 1e-3 * moved[elbow]
+
+
+def test_the_controllers_dt_and_the_simulations_step_are_independent(ur5):
+    """An advance of any duration runs n = ceil(duration / timestep) equal sub-steps; the
+    plant's clock is the sum of the durations. Halving the sub-step changes a motion from
+    rest by the integrator's first-order error only: the servo's transient moves a joint by
+    about v 2T, computed with a relative error of order h / 2T, so by v h at most."""
+    coarse, fine = MujocoPlant(ur5), MujocoPlant(ur5, timestep=0.0005)
+    rates = np.array([0.2, -0.1, 0.1, 0.3, 0.0, 0.5])
+    for plant in (coarse, fine):
+        plant.reset(ur5.home())
+        plant.advance(rates, 0.0025)
+    assert coarse.model.opt.timestep == pytest.approx(0.0025 / 3) and fine.model.opt.timestep == pytest.approx(0.0005)
+    for plant in (coarse, fine):
+        last = plant.advance(rates, 0.0175)
+    assert last.time == pytest.approx(0.02)
+    difference = np.abs(coarse.advance(rates, 1e-9).q - fine.advance(rates, 1e-9).q).max()
+    assert 0 < difference < np.abs(rates).max() * coarse.timestep
