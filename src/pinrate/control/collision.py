@@ -67,6 +67,9 @@ HALT_SCALE = 0.01
 0 only as the distance reaches the stop distance, and creeping at 1 % of the command is a halt
 in all but name."""
 
+COINCIDENT = 1e-9
+"""m: nearest points closer than this give no direction from a to b; coal's normal is taken."""
+
 _FLAT = 1e-6
 """A mesh thinner than this fraction of its length is kept as a mesh: qhull finds no 3-D hull
 of flat points, and coal 3.0 then crashes (a flat quad does; thickness/length 3e-8 did, 1e-7
@@ -122,6 +125,9 @@ class CollisionMonitor:
         self._model = model
         self._data = model.createData()
         self._geometry = robot.collision_model.copy()
+        self.sources = tuple(geometry_object.geometry for geometry_object in self._geometry.geometryObjects)
+        """Each geometry as the URDF gave it (a hulled one's mesh): what the compiled monitor
+        rebuilds (:mod:`.core_collision`)."""
         for geometry_object in self._geometry.geometryObjects:
             kept = _to_convex_hull(geometry_object)
             if kept and f"{robot.name}/{geometry_object.name}" not in _WARNED:
@@ -180,6 +186,14 @@ class CollisionMonitor:
         pin.computeDistances(self._model, self._data, self._geometry, self._geometry_data, q)
         return np.array([result.min_distance for result in self._geometry_data.distanceResults])
 
+    def _near_distances(self, indices: list[int], q: np.ndarray) -> list[float]:
+        """The distances (m) of the pairs ``indices`` alone at q (the others' are not read):
+        the compiled monitor asks coal the same pairs, so their GJK warm starts stay alike."""
+        model, data, geometry, geometry_data = self._model, self._data, self._geometry, self._geometry_data
+        pin.forwardKinematics(model, data, q)
+        pin.updateGeometryPlacements(model, data, geometry, geometry_data)
+        return [pin.computeDistance(geometry, geometry_data, index).min_distance for index in indices]
+
     def nearest(self, q: object) -> Proximity | None:
         """The nearest monitored pair at q (None when nothing is monitored)."""
         if not self.active:
@@ -209,7 +223,7 @@ class CollisionMonitor:
             length = float(np.linalg.norm(direction))
             # coal: p_b - p_a = d n with d signed, so p_b - p_a points against n when the
             # hulls overlap (d < 0); n (from a to b) is the gradient of d either way.
-            if length > 1e-9:
+            if length > COINCIDENT:
                 normal = direction / length if result.min_distance >= 0.0 else -direction / length
             else:
                 normal = np.array(result.normal)
@@ -249,14 +263,20 @@ class CollisionMonitor:
             if allowed < scale:
                 scale, limiting = max(allowed, 0.0), index
         if scale > 0.0:
-            after = self._distances(self.robot.integrate(q, joint_rates * scale, dt))
-            closing = [i for i in near if after[i] < self.stop_distance and after[i] < distances[i]]
+            after = self._near_distances(near, self.robot.integrate(q, joint_rates * scale, dt))
+            closing = [i for i, d in zip(near, after, strict=True) if d < self.stop_distance and d < distances[i]]
             if closing:
                 scale, limiting = 0.0, closing[0]
         if limiting < 0:
             return CollisionVerdict(1.0, Status.OK, "")
+        return self.verdict(scale, limiting, float(distances[limiting]))
+
+    def verdict(self, scale: float, limiting: int, distance: float) -> CollisionVerdict:
+        """The verdict of a step whose rates the pair ``limiting`` (its index in the pair list,
+        ``distance`` m apart at q) scales by ``scale``: a halt under :data:`HALT_SCALE`, else a
+        deceleration; in words (the compiled monitor's verdicts are said here too)."""
         first, second = self.pairs[limiting]
-        where = f"{first} and {second} are {distances[limiting]:.3g} m apart"
+        where = f"{first} and {second} are {distance:.3g} m apart"
         if scale < HALT_SCALE:
             return CollisionVerdict(0.0, Status.HALT_FOR_COLLISION, f"{where}: halted before {self.stop_distance:g} m")
         return CollisionVerdict(scale, Status.DECELERATE_FOR_COLLISION, f"{where}: rates scaled by {scale:.2g}")
@@ -317,6 +337,8 @@ def monitor_for(robot: Robot, collision: object) -> CollisionMonitor | None:
 
 
 __all__ = [
+    "APPROACH_SPEED",
+    "COINCIDENT",
     "HALT_SCALE",
     "SAFETY_DISTANCE",
     "STOP_DISTANCE",

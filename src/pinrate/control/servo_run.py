@@ -13,6 +13,7 @@ import numpy as np
 from ..compiled import CoreServo
 from .commands import PoseGoal
 from .controller import Controller, Observation, error_norms
+from .core_collision import core_monitor
 from .core_step import DETAILED, STATUSES, core_detail
 from .stall import stall_cause
 from .status import Status
@@ -97,6 +98,10 @@ class ServoRun:
         (a step that needs more than the core covers) until a stop rule ends it."""
         outcomes = core.core
         target = np.ascontiguousarray(self.goal.target.homogeneous)
+        monitor = self.controller.collision
+        # The core's monitor (Controller.compiled has checked that it runs there); a step it
+        # slows or halts is handed back.
+        collision = None if monitor is None else core_monitor(monitor)
         while True:
             outcome, self.step_number, self.best, self.progress, self.progress_step = core.run(
                 q0=self.log.q[self.step_number],
@@ -111,6 +116,7 @@ class ServoRun:
                 best=self.best,
                 progress=self.progress,
                 progress_step=self.progress_step,
+                collision=collision,
                 **self.log.arguments(),
             )
             if outcome not in (outcomes.HANDBACK, outcomes.FULL):
