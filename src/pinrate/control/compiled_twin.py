@@ -42,8 +42,10 @@ COMPILED_COVERAGE: dict[str, Coverage] = {
     "posture_gain": (None, ""),
 }
 """The compiled core's allow-list: every ``Controller`` option with whether the core covers it
-at a controller's value (and why not, in words or as a function of the controller). A test keeps its keys equal to ``Controller``'s parameters; an option
-added without an entry keeps its controllers on Python (:meth:`.Controller.compiled_reason`)."""
+at a controller's value and why not (in words, or a function of the controller giving them:
+the collision monitor's reason is its own). A test keeps its keys equal to ``Controller``'s
+parameters; an option added without an entry keeps its controllers on Python
+(:meth:`.Controller.compiled_reason`)."""
 
 
 def twin(controller: Any) -> CoreServo | None:
