@@ -7,7 +7,7 @@
 // monitor's distances, the damper's approach speed, the halt scale, the distance request's
 // settings). Per step the same Pinocchio and coal calls on the same numbers as the Python
 // monitor: geometry placements from the forward kinematics (updateGeometryPlacements),
-// coal's ComputeDistance per pair with pin's DistanceRequest, the velocity damper, the check
+// coal's ComputeDistance per pair with the monitor's DistanceRequest, the velocity damper, the check
 // at the integrated q. The verdict's words are Python's (the core hands back the pair, its
 // distance and the scale).
 #pragma once
@@ -31,13 +31,21 @@
 namespace pinrate_core {
 
 // The monitor's rules, each read from pinrate.control.collision (never typed here).
+// GJK's initial guess by its coal name (the Python monitor passes request.gjk_initial_guess.name).
+inline coal::GJKInitialGuess gjk_guess_of(const std::string &name) {
+  if (name == "DefaultGuess") return coal::GJKInitialGuess::DefaultGuess;
+  if (name == "CachedGuess") return coal::GJKInitialGuess::CachedGuess;
+  if (name == "BoundingVolumeGuess") return coal::GJKInitialGuess::BoundingVolumeGuess;
+  throw std::invalid_argument("coal has no GJK initial guess " + name);
+}
+
 struct CollisionRules {
   double safety_distance{}, stop_distance{};  // m: the monitor's
   double approach_speed{};                    // m/s: APPROACH_SPEED
   double halt_scale{};                        // HALT_SCALE
   double coincident{};                        // m: COINCIDENT, nearest points this close give no normal
-  double gjk_tolerance{};                     // the DistanceRequest's, as pin's GeometryData sets it
-  bool cached_gjk_guess{};                    // likewise
+  double gjk_tolerance{};                     // the Python monitor's DistanceRequests'
+  bool cached_gjk_guess{};                    // likewise (false: no warm start from the last result)
 };
 
 // One geometry as Python describes it: kind "hull" (vertices, hulled here), "mesh"
@@ -50,21 +58,27 @@ inline std::shared_ptr<coal::CollisionGeometry> make_geometry(const std::string 
     if (numbers.size() != count) throw std::invalid_argument("a " + kind + " takes " + std::to_string(count) + " numbers");
   };
   if (kind == "unused") return nullptr;
+  // Every geometry's local bounding box computed, as the Python monitor computes them (GJK's
+  // BoundingVolumeGuess starts from their centres).
+  const auto bounded = [](std::shared_ptr<coal::CollisionGeometry> geometry) {
+    geometry->computeLocalAABB();
+    return geometry;
+  };
   if (kind == "box") {
     need(3);  // half sides: Box(2 h) stores 2 h / 2 = h exactly
-    return std::make_shared<coal::Box>(2.0 * numbers[0], 2.0 * numbers[1], 2.0 * numbers[2]);
+    return bounded(std::make_shared<coal::Box>(2.0 * numbers[0], 2.0 * numbers[1], 2.0 * numbers[2]));
   }
   if (kind == "sphere") {
     need(1);
-    return std::make_shared<coal::Sphere>(numbers[0]);
+    return bounded(std::make_shared<coal::Sphere>(numbers[0]));
   }
   if (kind == "cylinder") {
     need(2);
-    return std::make_shared<coal::Cylinder>(numbers[0], 2.0 * numbers[1]);
+    return bounded(std::make_shared<coal::Cylinder>(numbers[0], 2.0 * numbers[1]));
   }
   if (kind == "capsule") {
     need(2);
-    return std::make_shared<coal::Capsule>(numbers[0], 2.0 * numbers[1]);
+    return bounded(std::make_shared<coal::Capsule>(numbers[0], 2.0 * numbers[1]));
   }
   if (kind != "hull" && kind != "mesh") throw std::invalid_argument("the compiled core has no geometry kind " + kind);
   if (numbers.size() % 3 != 0 || numbers.empty()) throw std::invalid_argument("vertices must be (V, 3)");
@@ -73,10 +87,9 @@ inline std::shared_ptr<coal::CollisionGeometry> make_geometry(const std::string 
   if (kind == "hull") {
     // collision.py's _to_convex_hull: BVHModelBase.buildConvexHull(False, "") on the mesh's
     // vertices, which is this call (qhull's command "" as the Python binding passes it).
-    std::shared_ptr<coal::ConvexBase> hull(
+    std::shared_ptr<coal::CollisionGeometry> hull(
         coal::ConvexBase::convexHull(vertices, static_cast<unsigned int>(vertices->size()), false, ""));
-    hull->computeLocalAABB();
-    return hull;
+    return bounded(hull);
   }
   if (triangles.size() % 3 != 0) throw std::invalid_argument("triangles must be (T, 3)");
   std::vector<coal::Triangle> faces;
@@ -92,7 +105,7 @@ inline std::shared_ptr<coal::CollisionGeometry> make_geometry(const std::string 
   mesh->beginModel(static_cast<unsigned int>(faces.size()), static_cast<unsigned int>(vertices->size()));
   mesh->addSubModel(*vertices, faces);
   mesh->endModel();
-  return mesh;
+  return bounded(mesh);
 }
 
 // What the monitor makes of a step: kind (CLEAR, SLOWED or HALTED), the factor of every rate,
@@ -109,7 +122,8 @@ class Collision {
  public:
   Collision(const Kinematics &kinematics, std::vector<std::shared_ptr<coal::CollisionGeometry>> geometries,
             std::vector<int> joints, std::vector<SE3> placements, const std::vector<int> &firsts,
-            const std::vector<int> &seconds, const CollisionRules &rules)
+            const std::vector<int> &seconds, const std::vector<coal::GJKInitialGuess> &guesses,
+            const CollisionRules &rules)
       : model_(kinematics.model),
         data_(model_),
         ahead_(model_),
@@ -118,7 +132,8 @@ class Collision {
         placements_(std::move(placements)),
         rules_(rules) {
     const std::size_t count = geometries_.size();
-    if (joints_.size() != count || placements_.size() != count || firsts.size() != seconds.size())
+    if (joints_.size() != count || placements_.size() != count || firsts.size() != seconds.size() ||
+        guesses.size() != firsts.size())
       throw std::invalid_argument("collision arrays of mismatched sizes");
     for (int joint : joints_)
       if (joint < 0 || joint >= model_.njoints) throw std::invalid_argument("a geometry's joint is not in the model");
@@ -129,12 +144,13 @@ class Collision {
         throw std::invalid_argument("a pair names no geometry");
       pairs_.push_back({a, b});
       functors_.emplace_back(geometries_[a].get(), geometries_[b].get());
-      // pin's GeometryData: DistanceRequest(true) per pair, then its settings. Each request
-      // keeps the pair's last GJK guess (coal updates it), so the two monitors warm-start
-      // alike when asked the same pairs at the same q's.
+      // pin's GeometryData: DistanceRequest(true) per pair, then the Python monitor's
+      // settings (GJK started from the bounding boxes' centres, or coal's default guess
+      // beside a mesh, never from the pair's last result: each distance a function of q).
       requests_.emplace_back(true);
       requests_.back().gjk_tolerance = rules_.gjk_tolerance;
       requests_.back().enable_cached_gjk_guess = rules_.cached_gjk_guess;
+      requests_.back().gjk_initial_guess = guesses[i];
     }
     results_.resize(pairs_.size());
     distances_.resize(pairs_.size());
@@ -181,7 +197,7 @@ class Collision {
       place(ahead_);
       coal::DistanceResult after_result;
       long closing = -1;
-      for (std::size_t i : near_) {  // every near pair, as Python asks them (their GJK guesses)
+      for (std::size_t i : near_) {  // every near pair, as Python asks them
         const double after = distance(i, after_result);
         if (closing < 0 && after < rules_.stop_distance && after < distances_[i]) closing = static_cast<long>(i);
       }
@@ -255,32 +271,47 @@ class Collision {
 
   // CollisionMonitor.approach_rates for pair i: n . (v_b(p_b) - v_a(p_a)) (m/s), n the unit
   // normal from a to b (the gradient of the signed distance), after limit()'s distances at q.
+  // Operation for operation as Python makes them in floats: the same doubles.
   double approach_rate(std::size_t i, const Vector &rates) {
     const coal::DistanceResult &result = results_[i];
-    const Eigen::Vector3d first = result.nearest_points[0], second = result.nearest_points[1];
-    const Eigen::Vector3d direction = second - first;
-    const double length = direction.norm();
-    Eigen::Vector3d normal;
-    if (length > rules_.coincident)
-      normal = result.min_distance >= 0.0 ? Eigen::Vector3d(direction / length) : Eigen::Vector3d(-direction / length);
-    else
-      normal = result.normal;
+    const coal::Vec3s &first = result.nearest_points[0], &second = result.nearest_points[1];
+    double dx = second[0] - first[0], dy = second[1] - first[1], dz = second[2] - first[2];
+    const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
+    double n[3];
+    if (length > rules_.coincident) {
+      if (result.min_distance < 0.0) dx = -dx, dy = -dy, dz = -dz;  // p_b - p_a points against n
+      n[0] = dx / length, n[1] = dy / length, n[2] = dz / length;
+    } else {
+      n[0] = result.normal[0], n[1] = result.normal[1], n[2] = result.normal[2];
+    }
     const Pair &pair = pairs_[i];
-    const Eigen::Vector3d velocity =
-        point_velocity(joints_[pair.second], second, rates) - point_velocity(joints_[pair.first], first, rates);
-    return normal.dot(velocity);
+    double va[3], vb[3];
+    point_velocity(joints_[pair.first], first, rates, va);
+    point_velocity(joints_[pair.second], second, rates, vb);
+    return n[0] * (vb[0] - va[0]) + n[1] * (vb[1] - va[1]) + n[2] * (vb[2] - va[2]);
   }
 
   // World velocity (m/s) of point (world, m) fixed to joint's body: the joint's
-  // LOCAL_WORLD_ALIGNED twist, shifted to the point.
-  Eigen::Vector3d point_velocity(int joint, const Eigen::Vector3d &point, const Vector &rates) {
-    if (joint == 0) return Eigen::Vector3d::Zero();
+  // LOCAL_WORLD_ALIGNED twist (v, w), v + w x (p - o).
+  void point_velocity(int joint, const coal::Vec3s &point, const Vector &rates, double velocity[3]) {
+    if (joint == 0) {
+      velocity[0] = velocity[1] = velocity[2] = 0.0;
+      return;
+    }
     jacobian_.setZero();
     pinocchio::getJointJacobian(model_, data_, static_cast<pinocchio::JointIndex>(joint),
                                 pinocchio::LOCAL_WORLD_ALIGNED, jacobian_);
-    const Eigen::Matrix<double, 6, 1> twist = jacobian_ * rates;
-    const Eigen::Vector3d linear = twist.head<3>(), angular = twist.tail<3>();
-    return linear + angular.cross(point - data_.oMi[joint].translation());
+    double twist[6];
+    for (int r = 0; r < 6; ++r) {
+      double total = 0.0;
+      for (int c = 0; c < model_.nv; ++c) total += jacobian_(r, c) * rates[c];
+      twist[r] = total;
+    }
+    const Eigen::Vector3d &origin = data_.oMi[joint].translation();
+    const double rx = point[0] - origin[0], ry = point[1] - origin[1], rz = point[2] - origin[2];
+    velocity[0] = twist[0] + (twist[4] * rz - twist[5] * ry);
+    velocity[1] = twist[1] + (twist[5] * rx - twist[3] * rz);
+    velocity[2] = twist[2] + (twist[3] * ry - twist[4] * rx);
   }
 };
 

@@ -388,12 +388,14 @@ nb::object step_given(Servo &servo, nb::handle q_object, nb::handle jacobian_obj
 
 // pinrate_core.Collision: geometry g (of the monitor's geometry model, in its order) is kinds[g]
 // with numbers[g] (and triangles[g] for a mesh) on joint joints[g] at placements[g] (G, 4, 4;
-// row-major homogeneous, in the joint's frame); pair i is (firsts[i], seconds[i]).
+// row-major homogeneous, in the joint's frame); pair i is (firsts[i], seconds[i]), its GJK
+// started from guesses[i].
 Collision make_collision(const Kinematics &kinematics, const std::vector<std::string> &kinds,
                          const std::vector<std::vector<double>> &numbers,
                          const std::vector<std::vector<long>> &triangles, const std::vector<int> &joints,
                          Array<const double> placements, const std::vector<int> &firsts,
-                         const std::vector<int> &seconds, const CollisionRules &rules) {
+                         const std::vector<int> &seconds, const std::vector<coal::GJKInitialGuess> &guesses,
+                         const CollisionRules &rules) {
   const std::size_t count = kinds.size();
   if (numbers.size() != count || triangles.size() != count || joints.size() != count ||
       placements.size() != 16 * count)
@@ -404,7 +406,7 @@ Collision make_collision(const Kinematics &kinematics, const std::vector<std::st
     geometries.push_back(make_geometry(kinds[g], numbers[g], triangles[g]));
     poses.push_back(se3_from(placements.data() + 16 * g));
   }
-  return Collision(kinematics, std::move(geometries), joints, std::move(poses), firsts, seconds, rules);
+  return Collision(kinematics, std::move(geometries), joints, std::move(poses), firsts, seconds, guesses, rules);
 }
 
 // --- the rho map (sample_convergence) and its bound ---------------------------------------
@@ -594,15 +596,18 @@ NB_MODULE(pinrate_core, module) {
               const std::vector<std::vector<double>> &numbers, const std::vector<std::vector<long>> &triangles,
               const std::vector<int> &joints, Array<const double> placements, const std::vector<int> &firsts,
               const std::vector<int> &seconds, double safety_distance, double stop_distance, double approach_speed,
-              double halt_scale, double coincident, double gjk_tolerance, bool cached_gjk_guess) {
+              double halt_scale, double coincident, double gjk_tolerance, bool cached_gjk_guess,
+              const std::vector<std::string> &gjk_initial_guesses) {
              const CollisionRules rules{safety_distance, stop_distance, approach_speed, halt_scale,
                                         coincident,      gjk_tolerance, cached_gjk_guess};
-             new (self) Collision(
-                 make_collision(kinematics, kinds, numbers, triangles, joints, placements, firsts, seconds, rules));
+             std::vector<coal::GJKInitialGuess> guesses;
+             for (const std::string &name : gjk_initial_guesses) guesses.push_back(gjk_guess_of(name));
+             new (self) Collision(make_collision(kinematics, kinds, numbers, triangles, joints, placements, firsts,
+                                                 seconds, guesses, rules));
            },
            nb::kw_only(), "kinematics"_a, "kinds"_a, "numbers"_a, "triangles"_a, "joints"_a, "placements"_a,
            "firsts"_a, "seconds"_a, "safety_distance"_a, "stop_distance"_a, "approach_speed"_a, "halt_scale"_a,
-           "coincident"_a, "gjk_tolerance"_a, "cached_gjk_guess"_a)
+           "coincident"_a, "gjk_tolerance"_a, "cached_gjk_guess"_a, "gjk_initial_guesses"_a)
       .def_prop_ro("pair_count", &Collision::pair_count)
       .def(
           "last",

@@ -4,7 +4,7 @@ handed to ``pinrate_core.Collision`` once, as plain arrays (``core/src/collision
 The Python monitor decides what is watched: its geometries and pairs (the SRDF's, the
 adjacent and the in-contact pairs removed) and its rules (its safety and stop distances,
 :data:`~.collision.APPROACH_SPEED`, :data:`~.collision.HALT_SCALE`,
-:data:`~.collision.COINCIDENT`, and the settings of pin's distance requests). The core gets,
+:data:`~.collision.COINCIDENT`, and the settings of its distance requests). The core gets,
 per geometry, its parent joint, its placement in that joint's frame (4x4, m) and its shape:
 a hulled mesh's vertices (the core hulls them by the same coal call on the same vertices, so
 the hulls are the same), a mesh kept as it is (vertices and triangles), or a box, sphere,
@@ -107,6 +107,7 @@ def _build(core: Any, monitor: CollisionMonitor) -> Any:
         coincident=COINCIDENT,
         gjk_tolerance=float(request.gjk_tolerance),
         cached_gjk_guess=cached_gjk_guess,
+        gjk_initial_guesses=[str(each.gjk_initial_guess.name) for each in monitor._geometry_data.distanceRequests],
     )
 
 
