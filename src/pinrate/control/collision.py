@@ -229,8 +229,8 @@ class CollisionMonitor:
         approach = np.empty(len(indices))
         for slot, index in enumerate(indices):
             result = results[index]
-            first = result.getNearestPoint1().tolist()
-            second = result.getNearestPoint2().tolist()
+            first = np.asarray(result.getNearestPoint1(), dtype=float).tolist()
+            second = np.asarray(result.getNearestPoint2(), dtype=float).tolist()
             dx, dy, dz = second[0] - first[0], second[1] - first[1], second[2] - first[2]
             length = math.sqrt(dx * dx + dy * dy + dz * dz)
             # coal: p_b - p_a = d n with d signed, so p_b - p_a points against n when the
@@ -240,7 +240,7 @@ class CollisionMonitor:
                     dx, dy, dz = -dx, -dy, -dz
                 nx, ny, nz = dx / length, dy / length, dz / length
             else:
-                nx, ny, nz = result.normal.tolist()
+                nx, ny, nz = np.asarray(result.normal, dtype=float).tolist()
             a, b = self._pairs[index]
             va = self._point_velocity(objects[a].parentJoint, first, rates)
             vb = self._point_velocity(objects[b].parentJoint, second, rates)
