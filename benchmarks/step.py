@@ -108,6 +108,11 @@ def measure(robot_name: str, *, batch: int, rounds: int) -> tuple[list[timing.Ro
         pass
     guarded = pinrate.Controller(robot, partition=partition, collision=True)
     functions["controller step, self-collision (exact)"] = (batched(lambda: guarded.step(q, twist)), batch)
+    for choice in paths:  # the monitor on each path (the row above takes the compiled one where installed)
+        functions[f"controller step, self-collision (exact), {choice}"] = (
+            timing.on(choice, batched(lambda: guarded.step(q, twist))),
+            batch,
+        )
     functions[BARE] = (batched(bare_servo_step), batch)
     functions["servo step, python, mca1, 300-step run"] = (timing.on("python", servo("mca1", 300)), 300)
     functions["servo step, python, exact, 300-step run"] = (timing.on("python", servo("exact", 300)), 300)

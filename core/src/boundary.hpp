@@ -46,14 +46,18 @@ constexpr std::array<const char *, INTERRUPTED> kOutcomeNames = {"CONVERGED", "D
                                                                  "MAX_STEPS", "HANDBACK",  "FULL"};
 
 // Flags of a step taken here (pinrate.compiled.boundary.STEP_FLAGS: the pinrate.control.Status
-// members met).
-enum StepFlag { SATURATED = 1, RATE_LIMITED_FLAG = 2, CLAMPED = 4 };
+// members met). A step the collision monitor halts carries COLLISION_HALTED alone, as
+// Python's halt says no other condition.
+enum StepFlag { SATURATED = 1, RATE_LIMITED_FLAG = 2, CLAMPED = 4, COLLISION_SLOWED_FLAG = 8, COLLISION_HALTED_FLAG = 16 };
 struct NamedFlag {
   const char *name;
   int value;
 };
-constexpr std::array<NamedFlag, 3> kStepFlags = {
-    {{"SATURATED", SATURATED}, {"RATE_LIMITED", RATE_LIMITED_FLAG}, {"CLAMPED", CLAMPED}}};
+constexpr std::array<NamedFlag, 5> kStepFlags = {{{"SATURATED", SATURATED},
+                                                  {"RATE_LIMITED", RATE_LIMITED_FLAG},
+                                                  {"CLAMPED", CLAMPED},
+                                                  {"COLLISION_SLOWED", COLLISION_SLOWED_FLAG},
+                                                  {"COLLISION_HALTED", COLLISION_HALTED_FLAG}}};
 
 // The blocks the conditioning bound may measure (pinrate.compiled.boundary.MEASURABLE).
 constexpr std::array<const char *, 3> kMeasurable = {"A", "W", "J"};

@@ -6,6 +6,8 @@
 //                                    step_at(...) takes one Controller.step from q, step_given(...)
 //                                    one from the caller's J
 // spectral_radius_at(qs, radii, threads)  rho at each configuration (sample_convergence), on threads
+// Collision(kinematics, ...)        the self-collision monitor (pinrate.control.core_collision),
+//                                    passed to step_at, step_given and run
 // jacobian_timing(qs, threads)       the map's Jacobians alone, timed (its bound; benchmarks)
 // solve_timing(...)                  one algorithm's solve alone, repeated (benchmarks)
 //
@@ -37,6 +39,7 @@
 
 #include "boundary.hpp"
 #include "closed_form.hpp"
+#include "collision.hpp"
 #include "kinematics.hpp"
 #include "servo.hpp"
 
@@ -213,7 +216,8 @@ nb::tuple run_servo(Servo &servo, Array<const double> q0, Array<const double> ta
                     double gain, double tol, long stall_steps, long max_steps, double divergence_factor,
                     double stall_improvement, long step_number, double best, double progress, long progress_step,
                     Array<double> q, Array<double> rates, Array<double> position, Array<double> orientation,
-                    Array<double> radius, Array<int> flags, Array<double> scale, Array<int> hit) {
+                    Array<double> radius, Array<int> flags, Array<double> scale, Array<int> hit,
+                    Collision *collision) {
   const int nq = servo.kinematics().nq();
   if (q0.size() != static_cast<std::size_t>(nq) || target.size() != 16) throw std::invalid_argument("q0 or target");
   const long capacity = static_cast<long>(flags.shape(0));
@@ -237,7 +241,7 @@ nb::tuple run_servo(Servo &servo, Array<const double> q0, Array<const double> ta
   {
     nb::gil_scoped_release release;
     outcome = servo.run(start, se3_from(target.data()), gain, tol, stall_steps, max_steps, divergence_factor,
-                        stall_improvement, state, log, interrupted);
+                        stall_improvement, state, log, interrupted, collision);
   }
   if (outcome == INTERRUPTED) throw nb::python_error();  // the signal handler's exception
   return nb::make_tuple(outcome, state.step_number, state.best, state.progress, state.progress_step);
@@ -332,7 +336,8 @@ nb::object seen(const Kinematics &kinematics) {
 // kinematics pass, advance. None where Python must check the inputs (an input not a float
 // array of its shape, or one its checks refuse: they say what is wrong), False where the step
 // is Python's; else taken_step's tuple, seen what the pass saw.
-nb::object step_at(Servo &servo, nb::handle q_object, nb::handle command, nb::handle target_object, double gain) {
+nb::object step_at(Servo &servo, nb::handle q_object, nb::handle command, nb::handle target_object, double gain,
+                   Collision *collision) {
   const Vector *q = read_q(servo, q_object.ptr());
   if (!q) return nb::none();
   double *twist;
@@ -356,14 +361,15 @@ nb::object step_at(Servo &servo, nb::handle q_object, nb::handle command, nb::ha
   }
   if (!servo.admits(*q)) return nb::none();
   Taken taken;
-  if (!servo.step_at(*q, pose ? &target : nullptr, gain, twist, taken)) return nb::bool_(false);
+  if (!servo.step_at(*q, pose ? &target : nullptr, gain, twist, taken, collision)) return nb::bool_(false);
   return taken_step(servo, taken, std::move(twist_array), seen(servo.kinematics()));
 }
 
 // One Controller.step from the caller's Observation (q (nq,) and J (6, nv), sensor axes, any
 // strides) and twist (m + k,): q inside the limits, the twist checked, advance. None, False or
 // taken_step's tuple (seen None: the caller has its Observation), as step_at.
-nb::object step_given(Servo &servo, nb::handle q_object, nb::handle jacobian_object, nb::handle command) {
+nb::object step_given(Servo &servo, nb::handle q_object, nb::handle jacobian_object, nb::handle command,
+                      Collision *collision) {
   const Vector *q = read_q(servo, q_object.ptr());
   Kinematics &kinematics = servo.kinematics();
   PyArrayObject *jacobian = float_array(jacobian_object.ptr(), 6, kinematics.nv());
@@ -374,8 +380,33 @@ nb::object step_given(Servo &servo, nb::handle q_object, nb::handle jacobian_obj
   for (npy_intp c = 0; c < kinematics.nv(); ++c)
     for (int r = 0; r < 6; ++r) kinematics.jacobian(r, c) = item(jacobian, r, c);
   Taken taken;
-  if (!servo.step_from_jacobian(*q, twist, taken)) return nb::bool_(false);
+  if (!servo.step_from_jacobian(*q, twist, taken, collision)) return nb::bool_(false);
   return taken_step(servo, taken, std::move(twist_array), nb::none());
+}
+
+// --- the self-collision monitor ----------------------------------------------------------
+
+// pinrate_core.Collision: geometry g (of the monitor's geometry model, in its order) is kinds[g]
+// with numbers[g] (and triangles[g] for a mesh) on joint joints[g] at placements[g] (G, 4, 4;
+// row-major homogeneous, in the joint's frame); pair i is (firsts[i], seconds[i]), its GJK
+// started from guesses[i].
+Collision make_collision(const Kinematics &kinematics, const std::vector<std::string> &kinds,
+                         const std::vector<std::vector<double>> &numbers,
+                         const std::vector<std::vector<long>> &triangles, const std::vector<int> &joints,
+                         Array<const double> placements, const std::vector<int> &firsts,
+                         const std::vector<int> &seconds, const std::vector<coal::GJKInitialGuess> &guesses,
+                         const CollisionRules &rules) {
+  const std::size_t count = kinds.size();
+  if (numbers.size() != count || triangles.size() != count || joints.size() != count ||
+      placements.size() != 16 * count)
+    throw std::invalid_argument("geometry arrays of mismatched sizes");
+  std::vector<std::shared_ptr<coal::CollisionGeometry>> geometries;
+  std::vector<SE3> poses;
+  for (std::size_t g = 0; g < count; ++g) {
+    geometries.push_back(make_geometry(kinds[g], numbers[g], triangles[g]));
+    poses.push_back(se3_from(placements.data() + 16 * g));
+  }
+  return Collision(kinematics, std::move(geometries), joints, std::move(poses), firsts, seconds, guesses, rules);
 }
 
 // --- the rho map (sample_convergence) and its bound ---------------------------------------
@@ -531,7 +562,8 @@ NB_MODULE(pinrate_core, module) {
   // pinrate keeps a Kinematics per Robot until exit; that is no leak worth a warning.
   nb::set_leak_warnings(false);
   module.attr("PINOCCHIO_VERSION") = PINOCCHIO_VERSION;
-  module.attr("ABI") = 6;  // bumped when pinrate.compiled must change with it
+  module.attr("ABI") = 7;  // bumped when pinrate.compiled must change with it
+  module.attr("COAL_VERSION") = COAL_VERSION;  // the coal headers and libcoal the core was built on
 
   // boundary.hpp's constants, which pinrate.compiled.boundary checks at load.
   module.attr("SINGULAR_RATIO") = kSingularRatio;
@@ -584,6 +616,50 @@ NB_MODULE(pinrate_core, module) {
 
   bind_settings(module);
 
+  nb::class_<Collision>(module, "Collision")
+      .def("__init__",
+           [](Collision *self, const Kinematics &kinematics, const std::vector<std::string> &kinds,
+              const std::vector<std::vector<double>> &numbers, const std::vector<std::vector<long>> &triangles,
+              const std::vector<int> &joints, Array<const double> placements, const std::vector<int> &firsts,
+              const std::vector<int> &seconds, double safety_distance, double stop_distance, double approach_speed,
+              double halt_scale, double coincident, double gjk_tolerance, bool cached_gjk_guess,
+              const std::vector<std::string> &gjk_initial_guesses) {
+             const CollisionRules rules{safety_distance, stop_distance, approach_speed, halt_scale,
+                                        coincident,      gjk_tolerance, cached_gjk_guess};
+             std::vector<coal::GJKInitialGuess> guesses;
+             for (const std::string &name : gjk_initial_guesses) guesses.push_back(gjk_guess_of(name));
+             new (self) Collision(make_collision(kinematics, kinds, numbers, triangles, joints, placements, firsts,
+                                                 seconds, guesses, rules));
+           },
+           nb::kw_only(), "kinematics"_a, "kinds"_a, "numbers"_a, "triangles"_a, "joints"_a, "placements"_a,
+           "firsts"_a, "seconds"_a, "safety_distance"_a, "stop_distance"_a, "approach_speed"_a, "halt_scale"_a,
+           "coincident"_a, "gjk_tolerance"_a, "cached_gjk_guess"_a, "gjk_initial_guesses"_a)
+      .def_prop_ro("pair_count", &Collision::pair_count)
+      .def(
+          "last",
+          [](const Collision &self) {
+            const CollisionVerdict &verdict = self.last();
+            return nb::make_tuple(verdict.kind, verdict.scale, verdict.pair, verdict.distance);
+          },
+          "(kind, scale, pair, distance) of the last verdict: kind 0 clear, 1 slowed, 2 halted")
+      .def(
+          "limit",
+          [](Collision &self, Array<const double> q, Array<const double> rates, double dt) {
+            if (q.size() != static_cast<std::size_t>(self.nq()) || rates.size() != static_cast<std::size_t>(self.nv()))
+              throw std::invalid_argument("q must be (nq,) and rates (nv,)");
+            const CollisionVerdict verdict =
+                self.limit(Eigen::Map<const Vector>(q.data(), q.size()), Eigen::Map<const Vector>(rates.data(), rates.size()), dt);
+            return nb::make_tuple(verdict.kind, verdict.scale, verdict.pair, verdict.distance);
+          },
+          "q"_a, "rates"_a, "dt"_a, "CollisionMonitor.limit's verdict as (kind, scale, pair, distance)")
+      .def(
+          "distances",
+          [](Collision &self, Array<const double> q) {
+            if (q.size() != static_cast<std::size_t>(self.nq())) throw std::invalid_argument("q must be (nq,)");
+            return self.distances_at(Eigen::Map<const Vector>(q.data(), q.size()));
+          },
+          "q"_a, "every pair's distance (m) at q");
+
   nb::class_<Servo>(module, "Servo")
       .def("__init__",
            [](Servo *self, Kinematics &kinematics, const GivenSettings &settings) {
@@ -592,10 +668,13 @@ NB_MODULE(pinrate_core, module) {
            "kinematics"_a, "settings"_a, nb::keep_alive<1, 2>())
       .def("run", &run_servo, nb::kw_only(), "q0"_a, "target"_a, "gain"_a, "tol"_a, "stall_steps"_a, "max_steps"_a,
            "divergence_factor"_a, "stall_improvement"_a, "step_number"_a, "best"_a, "progress"_a, "progress_step"_a,
-           "q"_a, "rates"_a, "position"_a, "orientation"_a, "radius"_a, "flags"_a, "scale"_a, "hit"_a)
+           "q"_a, "rates"_a, "position"_a, "orientation"_a, "radius"_a, "flags"_a, "scale"_a, "hit"_a,
+           "collision"_a.none() = nb::none())
       // .none(): any object reaches the step (None included), which reads what it can.
-      .def("step_at", &step_at, "q"_a.none(), "twist"_a.none(), "target"_a.none(), "gain"_a)
-      .def("step_given", &step_given, "q"_a.none(), "jacobian"_a.none(), "twist"_a.none())
+      .def("step_at", &step_at, "q"_a.none(), "twist"_a.none(), "target"_a.none(), "gain"_a,
+           "collision"_a.none() = nb::none())
+      .def("step_given", &step_given, "q"_a.none(), "jacobian"_a.none(), "twist"_a.none(),
+           "collision"_a.none() = nb::none())
       .def("spectral_radius_at", &spectral_radius_at, "configurations"_a, "radii"_a, "threads"_a = 1)
       .def("jacobian_timing", &jacobian_timing, "configurations"_a, "threads"_a = 1)
       .def("solve_timing", &solve_timing);

@@ -21,6 +21,7 @@
 
 #include "boundary.hpp"
 #include "closed_form.hpp"
+#include "collision.hpp"
 #include "general.hpp"
 #include "kinematics.hpp"
 
@@ -134,7 +135,7 @@ class Servo {
   // The loop from state.step_number; returns an Outcome.
   int run(Eigen::Ref<const Vector> q0, const SE3 &target, double gain, double tol, long stall_steps, long max_steps,
           double divergence_factor, double stall_improvement, ServoState &state, ServoLog &log,
-          const std::function<bool()> &interrupted) {
+          const std::function<bool()> &interrupted, Collision *collision = nullptr) {
     const int nq = kin_.nq(), nv = kin_.nv();
     // The step's vectors live across steps: the loop allocates nothing per step.
     Vector q = q0, next(nq), rates(nv);
@@ -170,7 +171,9 @@ class Servo {
       double twist[6];
       for (int r = 0; r < s_.m + k_; ++r) twist[r] = gain * error[r];
       Taken taken;
-      if (!advance(q, twist, parts, R, rates, next, taken)) return HANDBACK;
+      // A step the collision monitor slows or halts is Python's (the log has no room for
+      // its words): the loop hands it back.
+      if (!advance(q, twist, parts, R, rates, next, taken, collision, true)) return HANDBACK;
       log.flags[step] = taken.flags;
       log.scale[step] = taken.scale;
       log.hit[step] = taken.hit;
@@ -183,10 +186,11 @@ class Servo {
   // One step's common path (Controller.step's), from the J of kin_ at q and the commanded
   // twist (partition order, sensor axes; saturated in place): saturation, the conditioning
   // bound, the algorithm, the position-limit test, the decelerate look-ahead, the velocity
-  // scale, integration and the clamp. parts and R are J's blocks and reduced J where the
-  // caller has them (R may be empty: made here when needed). false: the step is Python's.
+  // scale, the collision monitor (when given), integration and the clamp. parts and R are J's
+  // blocks and reduced J where the caller has them (R may be empty: made here when needed).
+  // false: the step is Python's (with hand_back_collision, any step the monitor slows or halts).
   bool advance(const Vector &q, double *twist, const Blocks &parts, Matrix &R, Vector &rates, Vector &next,
-               Taken &taken) {
+               Taken &taken, Collision *collision = nullptr, bool hand_back_collision = false) {
     const bool need_reduced = !s_.small || s_.measure_j;
     int flags = 0;
     if (saturate(twist)) flags |= SATURATED;
@@ -206,6 +210,20 @@ class Servo {
     if (scale < 1.0) {
       rates *= scale;
       flags |= RATE_LIMITED_FLAG;
+    }
+    if (collision != nullptr) {  // Finish: after the velocity scale, before integration
+      const CollisionVerdict &verdict = collision->limit(q, rates, s_.dt);
+      if (verdict.kind != COLLISION_CLEAR && hand_back_collision) return false;
+      if (verdict.kind == COLLISION_HALTED) {  // Finish.halt: q kept, rates 0, no other condition
+        rates.setZero();
+        next = q;
+        taken = {COLLISION_HALTED_FLAG, scale, -1};
+        return true;
+      }
+      if (verdict.kind == COLLISION_SLOWED) {
+        rates *= verdict.scale;
+        flags |= COLLISION_SLOWED_FLAG;
+      }
     }
     displacement_ = rates * s_.dt;
     pinocchio::integrate(kin_.model, q, displacement_, next);
@@ -247,21 +265,22 @@ class Servo {
   // and the poses at q), the twist -- the command's (m + k,; partition order, sensor axes),
   // or, with a target, gain times the pose error to it, written into twist -- then advance;
   // rates() and next() hold the step. false: the step is Python's.
-  bool step_at(const Vector &q, const SE3 *target, double gain, double *twist, Taken &taken) {
+  bool step_at(const Vector &q, const SE3 *target, double gain, double *twist, Taken &taken,
+               Collision *collision = nullptr) {
     kin_.compute(q);
     if (target != nullptr) {
       const Eigen::Matrix<double, 6, 1> error = kin_.pose_error(*target);
       for (int r = 0; r < s_.m + k_; ++r) twist[r] = gain * error[s_.rows[r]];
     }
-    return step_from_jacobian(q, twist, taken);
+    return step_from_jacobian(q, twist, taken, collision);
   }
 
   // Controller.step per call at q (nq,) with kin_.jacobian already J at q (the caller's
   // kinematics pass): the blocks from it, then advance.
-  bool step_from_jacobian(const Vector &q, double *twist, Taken &taken) {
+  bool step_from_jacobian(const Vector &q, double *twist, Taken &taken, Collision *collision = nullptr) {
     const Blocks parts = s_.small ? blocks() : Blocks{};
     Matrix R = !s_.small || s_.measure_j ? reduced() : Matrix();
-    return advance(q, twist, parts, R, rates_, next_, taken);
+    return advance(q, twist, parts, R, rates_, next_, taken, collision);
   }
 
   // The per-call step's vectors: q (nq,) as the caller fills it, and the step's rates (nv,)

@@ -28,7 +28,9 @@ from pinrate.solvers import eigen, singular
 
 
 def real_core() -> types.ModuleType:
-    """pinrate_core itself, whatever path PINRATE_BACKEND chooses."""
+    """pinrate_core itself, whatever path PINRATE_BACKEND chooses (coal first: the core links
+    the libcoal.so its binding loads)."""
+    importlib.import_module("coal")
     return importlib.import_module("pinrate_core")
 
 

@@ -1,7 +1,7 @@
 """The compiled core installs the way the README says: ``pip install ./core``, build isolation on.
 
-Under pip's build isolation the build requirements (libpinocchio, cmeel-eigen, cmeel-boost,
-nanobind) live in a throwaway build environment, not in the target environment; the core's
+Under pip's build isolation the build requirements (libpinocchio, libcoal, cmeel-eigen,
+cmeel-boost, nanobind) live in a throwaway build environment, not in the target environment; the core's
 CMakeLists.txt finds the headers through the build's own Python (importlib.metadata, then
 cmeel.prefix/include on sys.path). Issue 20: it once looked only in the target environment's
 site-packages, so the documented install failed in a fresh venv.
@@ -88,9 +88,11 @@ def test_configure_finds_the_headers_of_the_running_interpreter(tmp_path: Path) 
     assert result.returncode == 0, result.stdout + result.stderr
     headers = re.search(r"-- Headers: (.*)", result.stdout)
     assert headers, result.stdout
-    for what in ("Pinocchio", "Eigen", "Boost"):
+    for what in ("Pinocchio", "Eigen", "Boost", "coal"):
         assert what in headers.group(1)
     assert "(libpinocchio " in headers.group(1) and "(cmeel-eigen " in headers.group(1)
+    library = re.search(r"-- libcoal: (.*)", result.stdout)  # the collision monitor links it
+    assert library and Path(library.group(1)).name == "libcoal.so" and Path(library.group(1)).is_file()
 
 
 @needs_configure_tools
@@ -161,6 +163,7 @@ def test_pip_install_core_in_a_fresh_venv(tmp_path: Path) -> None:
         "b = pinrate.backend()\n"
         "print(b.name); print(b.reason); print(pinocchio.__version__); print(pinrate_core.PINOCCHIO_VERSION)\n"
         "print(m.version('pinrate-core')); print(pinrate_core.__file__)\n"
+        "import coal; print(coal.__version__); print(pinrate_core.COAL_VERSION)\n"
     )
     result = subprocess.run(
         [python, "-c", probe],
@@ -171,15 +174,19 @@ def test_pip_install_core_in_a_fresh_venv(tmp_path: Path) -> None:
         env=_environment(PINRATE_BACKEND="auto"),
     )
     assert result.returncode == 0, result.stderr
-    name, reason, runtime_pin, header_pin, version, library = result.stdout.split("\n")[:6]
+    name, reason, runtime_pin, header_pin, version, library, runtime_coal, header_coal = result.stdout.split("\n")[:8]
     assert name == "compiled", reason
+    # The collision monitor runs in the core only on the coal it was built on: the README's
+    # install gives the same release to both.
+    assert runtime_coal == header_coal
     assert version == _core_version()
     assert library.startswith(str(venv)), library
-    # The core links no libpinocchio: the headers' release and the runtime's may differ.
+    # The core links no libpinocchio (the headers' release and the runtime's may differ), only
+    # libcoal.so (the collision monitor).
     readelf = shutil.which("readelf")
     if readelf:
         needed = subprocess.run([readelf, "-d", library], capture_output=True, text=True, check=True).stdout
-        assert "pinocchio" not in needed, needed
+        assert "pinocchio" not in needed and "libcoal.so" in needed, needed
     print(
         f"\nfresh-venv install: {', '.join(f'{step} {seconds:.0f} s' for step, seconds in times.items())}; "
         f"core on Pinocchio {header_pin}'s headers beside pin {runtime_pin}"

@@ -36,7 +36,19 @@ RATE_LIMITED = 2
 CLAMPED = 4
 """Step flag: a joint was clamped to a position limit (``Status.JOINT_LIMIT``)."""
 
-STEP_FLAGS = {"SATURATED": SATURATED, "RATE_LIMITED": RATE_LIMITED, "CLAMPED": CLAMPED}
+COLLISION_SLOWED = 8
+"""Step flag: the collision monitor scaled the rates (``Status.DECELERATE_FOR_COLLISION``)."""
+
+COLLISION_HALTED = 16
+"""Step flag, alone: the collision monitor halted the step (``Status.HALT_FOR_COLLISION``)."""
+
+STEP_FLAGS = {
+    "SATURATED": SATURATED,
+    "RATE_LIMITED": RATE_LIMITED,
+    "CLAMPED": CLAMPED,
+    "COLLISION_SLOWED": COLLISION_SLOWED,
+    "COLLISION_HALTED": COLLISION_HALTED,
+}
 """The flags of a step the core took (``pinrate_core.STEP_FLAGS``)."""
 
 MEASURABLE = ("A", "W", "J")

@@ -25,7 +25,7 @@ CHOICES = ("auto", "python", "compiled")
 CORE_MODULE = "pinrate_core"
 """The extension module's name."""
 
-CORE_ABI = 6
+CORE_ABI = 7
 """The ``pinrate_core.ABI`` this pinrate speaks; a core of another ABI is not used, nor one
 whose constants or settings' fields differ from this pinrate's (:mod:`.boundary`)."""
 
@@ -62,6 +62,9 @@ def _import_core() -> tuple[ModuleType | None, str]:
     global _loaded
     if _loaded is None:
         try:
+            # The core links libcoal.so (the collision monitor) without a path to it: the coal
+            # binding loads the one pin runs, and the core's reference resolves to it.
+            importlib.import_module("coal")
             module = importlib.import_module(CORE_MODULE)
         except ImportError as error:
             _loaded = (
@@ -104,7 +107,8 @@ def backend() -> Backend:
 
     ``compiled`` where ``pinrate_core`` imports; a configuration the core does not cover (a
     joint type it does not rebuild, auxiliary elbow control, a posture task, acceleration
-    limits, the collision monitor, blocks larger than 3x3) still runs on Python, per call.
+    limits, blocks larger than 3x3, a collision monitor where the coal that runs is not the
+    one the core was built on) still runs on Python, per call.
     """
     choice = _requested()
     if choice == "python":

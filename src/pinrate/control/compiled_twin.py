@@ -11,16 +11,17 @@ from typing import Any
 from ..compiled import CoreServo, ServoSettings, backend, core_kinematics, core_servo
 from ..errors import UnsupportedByCoreError
 from ..solvers.reference import DLS_DAMPING, EXACT_RCOND
+from .core_collision import python_reason
 from .singularity.decelerate import WATCH_FACTOR, WATCHED_STEP
 
-Coverage = tuple[Callable[[Any], bool] | None, str]
+Coverage = tuple[Callable[[Any], bool] | None, str | Callable[[Any], str]]
 
 COMPILED_COVERAGE: dict[str, Coverage] = {
     # (covered at this controller's value, or None: at every value; why not), first reason first
     "singularity": (lambda c: c.auxiliary is None, "auxiliary elbow control runs on the Python path"),
     "posture": (lambda c: c.posture is None, "a posture task runs on the Python path"),
     "acceleration_limits": (lambda c: c.acceleration_limits is None, "acceleration limits run on the Python path"),
-    "collision": (lambda c: c.collision is None, "the collision monitor runs on the Python path"),
+    "collision": (lambda c: python_reason(c.collision) is None, lambda c: str(python_reason(c.collision))),
     "partition": (
         lambda c: c.index.small or c.index.pseudo_g,
         "a tall A or a wide W (rho is then the error map's) runs on the Python path",
@@ -41,8 +42,10 @@ COMPILED_COVERAGE: dict[str, Coverage] = {
     "posture_gain": (None, ""),
 }
 """The compiled core's allow-list: every ``Controller`` option with whether the core covers it
-at a controller's value. A test keeps its keys equal to ``Controller``'s parameters; an option
-added without an entry keeps its controllers on Python (:meth:`.Controller.compiled_reason`)."""
+at a controller's value and why not (in words, or a function of the controller giving them:
+the collision monitor's reason is its own). A test keeps its keys equal to ``Controller``'s
+parameters; an option added without an entry keeps its controllers on Python
+(:meth:`.Controller.compiled_reason`)."""
 
 
 def twin(controller: Any) -> CoreServo | None:
@@ -86,9 +89,9 @@ def reason(controller: Any, options: tuple[str, ...]) -> str | None:
             return backend().reason
     except UnsupportedByCoreError as unsupported:
         return str(unsupported)
-    for covered, reason in COMPILED_COVERAGE.values():
+    for covered, why in COMPILED_COVERAGE.values():
         if covered is not None and not covered(controller):
-            return reason
+            return why if isinstance(why, str) else why(controller)
     driven = [
         follower.name
         for follower in controller.robot.mimics.followers

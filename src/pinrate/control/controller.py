@@ -221,7 +221,7 @@ class Controller:
         )
         self._joint_space = JointSpace(self.context, facts, self._positions, self._finish)
         sight = Sight(self.algorithm, index, robot.nv, robot.sensor_id == robot.tip_id)
-        self._core_step = CorePath(self.compiled, facts.limits, sight, self._wanted_twist)
+        self._core_step = CorePath(self.compiled, facts.limits, sight, self._wanted_twist, self.collision)
         self._built = True
 
     def __setattr__(self, name: str, value: object) -> None:

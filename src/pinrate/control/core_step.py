@@ -5,14 +5,16 @@ step to :class:`CoreStep` where the core covers the controller (:mod:`.compiled_
 allow-list): in one call the core checks q and the twist as Python would, makes the
 kinematics pass (or takes the caller's observation), and runs the step's common path
 (saturation, the conditioning bound, the algorithm, the position-limit test, the decelerate
-look-ahead, the velocity scale, integration over dt, the clamp; ``core/src/servo.hpp``'s
+look-ahead, the velocity scale, the self-collision monitor (:mod:`.core_collision`),
+integration over dt, the clamp; ``core/src/servo.hpp``'s
 ``Servo::advance``, the servo loop's own). It hands back, to Python, any input its checks
 refuse (Python's checks then raise their own words) and any step that needs more (the
 singular region, a joint passing a limit, a singular block, a big step near the region).
 The step's :class:`CoreObservation` is made from the pass when it is first read.
 
-A step the core took is said by its flags (SATURATED, RATE_LIMITED, CLAMPED), its velocity
-scale and the first limit it clamped: :data:`CONDITIONS` and :func:`core_detail` turn them
+A step the core took is said by its flags (SATURATED, RATE_LIMITED, COLLISION_SLOWED,
+COLLISION_HALTED, CLAMPED), its velocity scale, the collision monitor's last verdict and the
+first limit it clamped: :data:`CONDITIONS` and :func:`core_detail` turn them
 into the statuses and the detail :class:`~.finish.Finish` gives the same step, for this
 per-call step and the servo loop's log alike (the one mapping).
 """
@@ -27,9 +29,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..compiled import CoreServo, chosen, core_module
-from ..compiled.boundary import CLAMPED, RATE_LIMITED, SATURATED, STEP_FLAGS
+from ..compiled.boundary import CLAMPED, COLLISION_HALTED, COLLISION_SLOWED, RATE_LIMITED, SATURATED, STEP_FLAGS
 from ..kinematics.partition import PartitionIndex
+from .collision import CollisionMonitor
 from .commands import PoseGoal
+from .core_collision import core_monitor, core_verdict_detail
 from .limits.position import reached_detail
 from .limits.velocity import scaled_detail
 from .observation import Observation, Step
@@ -39,9 +43,13 @@ from .status import Status, ranked
 
 def _conditions(flags: int) -> tuple[Status, ...]:
     """The conditions :class:`~.finish.Finish` ranks for a step with these core flags."""
+    if flags & COLLISION_HALTED:  # Finish.halt: the halt alone
+        return (Status.HALT_FOR_COLLISION,)
     statuses = [Status.TWIST_SATURATED] if flags & SATURATED else []
     if flags & RATE_LIMITED:
         statuses.append(Status.RATE_LIMITED)
+    if flags & COLLISION_SLOWED:
+        statuses.append(Status.DECELERATE_FOR_COLLISION)
     if flags & CLAMPED:
         statuses.append(Status.JOINT_LIMIT)
     return ranked(statuses)
@@ -53,17 +61,27 @@ CONDITIONS: tuple[tuple[Status, ...], ...] = tuple(_conditions(flags) for flags 
 STATUSES: tuple[Status, ...] = tuple(conditions[-1] if conditions else Status.OK for conditions in CONDITIONS)
 """The status (the most severe condition) of a step the core took, indexed by its flags."""
 
-DETAILED = RATE_LIMITED | CLAMPED
+DETAILED = RATE_LIMITED | CLAMPED | COLLISION_SLOWED | COLLISION_HALTED
 """The flags whose conditions carry a detail (a saturated twist has none)."""
 
+COLLIDING = COLLISION_SLOWED | COLLISION_HALTED
+"""The flags of a step the collision monitor slowed or halted."""
 
-def core_detail(flags: int, scale: float, limit: Callable[[], Limit], next_q: np.ndarray) -> str:
-    """The detail of a step the core took: the velocity scale's words, then the clamped
-    limit's (``limit()`` gives the first one clamped; ``next_q`` (nq,) the clamped q), joined
-    as :class:`~.finish.Finish` joins them."""
+
+def core_detail(
+    flags: int, scale: float, limit: Callable[[], Limit], next_q: np.ndarray, collision: Callable[[], str] = str
+) -> str:
+    """The detail of a step the core took: the velocity scale's words, the collision
+    monitor's (``collision()``), then the clamped limit's (``limit()`` gives the first one
+    clamped; ``next_q`` (nq,) the clamped q), joined as :class:`~.finish.Finish` joins them;
+    a halted step's is the monitor's alone."""
+    if flags & COLLISION_HALTED:
+        return collision()
     parts = []
     if flags & RATE_LIMITED:
         parts.append(scaled_detail(scale))
+    if flags & COLLISION_SLOWED:
+        parts.append(collision())
     if flags & CLAMPED:
         clamped = limit()
         parts.append(reached_detail(clamped, float(next_q[clamped.q_index])))
@@ -143,6 +161,8 @@ class CoreStep:
         sight: what the step's :class:`CoreObservation` needs.
         wanted: the controller's twist for a :class:`PoseGoal` at a caller's observation
             (m + k,; a new array).
+        collision: the controller's collision monitor, or None (the core runs its
+            ``pinrate_core.Collision``, :mod:`.core_collision`).
     """
 
     def __init__(
@@ -151,11 +171,14 @@ class CoreStep:
         limits: tuple[Limit, ...],
         sight: Sight,
         wanted: Callable[[Observation, PoseGoal], np.ndarray],
+        collision: CollisionMonitor | None = None,
     ) -> None:
         self._at, self._given = twin.step_functions()
         self._limits = limits
         self._sight = sight
         self._wanted = wanted
+        self._monitor = collision
+        self._collision = None if collision is None else core_monitor(collision)
 
     def __call__(self, q: object, command: object, observation: Observation | None) -> Step | Literal[False] | None:
         """The step from q (or from the caller's ``observation``, then its q and J) with
@@ -165,21 +188,26 @@ class CoreStep:
         they say what is wrong); False where the step is Python's."""
         if observation is None:
             if isinstance(command, PoseGoal):
-                out = self._at(q, None, command.target.homogeneous, command.gain)
+                out = self._at(q, None, command.target.homogeneous, command.gain, self._collision)
             else:
-                out = self._at(q, command, None, 0.0)
+                out = self._at(q, command, None, 0.0, self._collision)
             if not out:
                 return out  # the core's None or False
             observation = _new(CoreObservation)
             observation._seen = (q, out[6], self._sight)
         else:
             twist = self._wanted(observation, command) if isinstance(command, PoseGoal) else command
-            out = self._given(observation.q, observation.jacobian, twist)
+            out = self._given(observation.q, observation.jacobian, twist, self._collision)
             if not out:
                 return out
         flags, scale, hit, next_q, rates, twist, _ = out
-        detail = core_detail(flags, scale, lambda: self._limits[hit], next_q) if flags & DETAILED else ""
+        detail = core_detail(flags, scale, lambda: self._limits[hit], next_q, self._said) if flags & DETAILED else ""
         return Step(next_q, rates, STATUSES[flags], (), twist, observation, detail, CONDITIONS[flags])
+
+    def _said(self) -> str:
+        """The compiled monitor's last verdict in the Python monitor's words."""
+        assert self._monitor is not None  # a step flagged by the monitor had one
+        return core_verdict_detail(self._monitor, self._collision)
 
 
 _new = object.__new__
@@ -192,7 +220,7 @@ class CorePath:
 
     Args:
         twin: the controller's :meth:`~.controller.Controller.compiled`.
-        limits, sight, wanted: as :class:`CoreStep`'s.
+        limits, sight, wanted, collision: as :class:`CoreStep`'s.
     """
 
     def __init__(
@@ -201,9 +229,10 @@ class CorePath:
         limits: tuple[Limit, ...],
         sight: Sight,
         wanted: Callable[[Observation, PoseGoal], np.ndarray],
+        collision: CollisionMonitor | None = None,
     ) -> None:
         self._twin = twin
-        self._arguments = (limits, sight, wanted)
+        self._arguments = (limits, sight, wanted, collision)
         self._steps: dict[str | None, CoreStep | None] = {}
 
     def __call__(self) -> CoreStep | None:

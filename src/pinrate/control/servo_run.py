@@ -14,6 +14,7 @@ from ..compiled import CoreServo
 from ..plants import Plant
 from .commands import PoseGoal
 from .controller import Controller, Observation, error_norms
+from .core_collision import core_monitor
 from .core_step import DETAILED, STATUSES, core_detail
 from .measured import onto_limits
 from .stall import stall_cause
@@ -109,6 +110,10 @@ class ServoRun:
         (a step that needs more than the core covers) until a stop rule ends it."""
         outcomes = core.core
         target = np.ascontiguousarray(self.goal.target.homogeneous)
+        monitor = self.controller.collision
+        # The core's monitor (Controller.compiled has checked that it runs there); a step it
+        # slows or halts is handed back.
+        collision = None if monitor is None else core_monitor(monitor)
         while True:
             outcome, self.step_number, self.best, self.progress, self.progress_step = core.run(
                 q0=self.log.q[self.step_number],
@@ -123,6 +128,7 @@ class ServoRun:
                 best=self.best,
                 progress=self.progress,
                 progress_step=self.progress_step,
+                collision=collision,
                 **self.log.arguments(),
             )
             if outcome not in (outcomes.HANDBACK, outcomes.FULL):
