@@ -44,6 +44,25 @@ rows, rank 4) went to Python: its steps judge what the joints cannot make (test_
 The robots of every two-path equality test (the servo loop, the per-call step)."""
 
 
+@contextlib.contextmanager
+def core_steps_taken() -> Iterator[list[bool]]:
+    """Records each call of the core's per-call step: True where it took the step, False
+    where it handed it back."""
+    from pinrate.control import core_step
+
+    calls: list[bool] = []
+    original = core_step.CoreStep.__call__
+
+    def counted(self: core_step.CoreStep, *arguments: object) -> pinrate.Step | bool | None:
+        step = original(self, *arguments)  # type: ignore[arg-type]
+        calls.append(isinstance(step, pinrate.Step))
+        return step
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(core_step.CoreStep, "__call__", counted)
+        yield calls
+
+
 def load(name: str) -> pinrate.Robot:
     return pinrate.load(DATA / "third_party" / "rtb_al5d_robot.urdf" if name == "al5d" else name)
 

@@ -504,3 +504,23 @@ endfacet
 endsolid t
 """
 """One triangle as an ASCII STL file: the smallest mesh Pinocchio reads (tests that write meshes)."""
+
+
+def flat_plate(robot: pinrate.Robot, name: str) -> pin.GeometryObject:
+    """A flat 10 cm square plate of two triangles, 0.2 m out along wrist_3_link's z axis: a
+    mesh qhull cannot hull (no 3-D hull; coal 3.0's convexHull would end the process on it),
+    so the collision monitor keeps it as a mesh. Added to ``robot``'s collision model under
+    ``name`` (the monitor warns once per robot and geometry name) and returned."""
+    import coal
+
+    plate = coal.BVHModelOBBRSS()
+    plate.beginModel(2, 4)
+    plate.addVertices(np.array([[-0.05, -0.05, 0.0], [0.05, -0.05, 0.0], [0.05, 0.05, 0.0], [-0.05, 0.05, 0.0]]))
+    plate.addTriangles(np.array([[0, 1, 2], [0, 2, 3]]))
+    plate.endModel()
+    frame = robot.model.getFrameId("wrist_3_link")
+    joint = robot.model.frames[frame].parentJoint
+    placement = pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.2]))
+    geometry = pin.GeometryObject(name, joint, frame, placement, plate)
+    robot.collision_model.addGeometryObject(geometry)
+    return geometry

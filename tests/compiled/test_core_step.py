@@ -19,8 +19,7 @@ import numpy as np
 import pytest
 
 import pinrate
-from compiled_core import ROBOTS, bitwise, load, needs_core, path
-from pinrate.control import core_step
+from compiled_core import ROBOTS, bitwise, core_steps_taken, load, needs_core, path
 from pinrate.control.controller import Controller
 from pinrate.control.observation import Observation
 from pinrate.control.status import Status
@@ -33,18 +32,8 @@ EPS = np.finfo(float).eps
 
 @pytest.fixture
 def taken() -> Iterator[list[bool]]:
-    """Records each call of the core's step: True where it took the step, False where it
-    handed it back."""
-    calls: list[bool] = []
-    original = core_step.CoreStep.__call__
-
-    def counted(self: core_step.CoreStep, *arguments: object) -> pinrate.Step | bool | None:
-        step = original(self, *arguments)  # type: ignore[arg-type]
-        calls.append(isinstance(step, pinrate.Step))
-        return step
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(core_step.CoreStep, "__call__", counted)
+    """Each call of the core's per-call step: True where it took the step."""
+    with core_steps_taken() as calls:
         yield calls
 
 

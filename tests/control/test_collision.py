@@ -17,6 +17,7 @@ import pinrate
 from pinrate import Controller, InputError, JointJog, Status
 from pinrate.control.collision import CollisionMonitor
 from pinrate.kinematics.targets import nearby_target
+from support import flat_plate
 
 
 def mesh_distances(robot: pinrate.Robot, monitor: CollisionMonitor, q: np.ndarray) -> dict[tuple[str, str], float]:
@@ -277,15 +278,7 @@ def test_a_mesh_with_no_hull_is_monitored_as_its_mesh_and_said_once() -> None:
     # A flat plate (two triangles): qhull finds no 3-D hull, and coal 3.0's convexHull would
     # end the process on it. The monitor keeps the mesh (exact, so still conservative).
     robot = pinrate.load("ur5")
-    plate = coal.BVHModelOBBRSS()
-    plate.beginModel(2, 4)
-    plate.addVertices(np.array([[-0.05, -0.05, 0.0], [0.05, -0.05, 0.0], [0.05, 0.05, 0.0], [-0.05, 0.05, 0.0]]))
-    plate.addTriangles(np.array([[0, 1, 2], [0, 2, 3]]))
-    plate.endModel()
-    frame = robot.model.getFrameId("wrist_3_link")
-    joint = robot.model.frames[frame].parentJoint
-    placement = pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.2]))
-    robot.collision_model.addGeometryObject(pin.GeometryObject("plate", joint, frame, placement, plate))
+    flat_plate(robot, "plate")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         monitor = CollisionMonitor(robot)

@@ -24,11 +24,12 @@ import pinocchio as pin
 import pytest
 
 import pinrate
-from compiled_core import bitwise, needs_core, path
+from compiled_core import bitwise, core_steps_taken, needs_core, path
 from pinrate import Controller, Status
-from pinrate.control import core_collision, core_step
+from pinrate.control import core_collision
 from pinrate.control.collision import CollisionMonitor
 from pinrate.control.core_collision import core_monitor, python_reason
+from support import flat_plate
 
 pytestmark = needs_core
 
@@ -53,16 +54,7 @@ def monitor_of(name: str) -> tuple[pinrate.Robot, CollisionMonitor]:
 @pytest.fixture
 def taken() -> Iterator[list[bool]]:
     """Each call of the core's per-call step: True where it took the step."""
-    calls: list[bool] = []
-    original = core_step.CoreStep.__call__
-
-    def counted(self: core_step.CoreStep, *arguments: object) -> pinrate.Step | bool | None:
-        step = original(self, *arguments)  # type: ignore[arg-type]
-        calls.append(isinstance(step, pinrate.Step))
-        return step
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(core_step.CoreStep, "__call__", counted)
+    with core_steps_taken() as calls:
         yield calls
 
 
@@ -233,17 +225,9 @@ def test_a_kept_mesh_is_monitored_in_the_core_as_a_mesh() -> None:
     # A flat plate qhull cannot hull stays a mesh (test_collision.py): the core rebuilds it
     # from its vertices and triangles, and reads the same distances and verdicts.
     robot = pinrate.load("ur5")
-    plate = coal.BVHModelOBBRSS()
-    plate.beginModel(2, 4)
-    plate.addVertices(np.array([[-0.05, -0.05, 0.0], [0.05, -0.05, 0.0], [0.05, 0.05, 0.0], [-0.05, 0.05, 0.0]]))
-    plate.addTriangles(np.array([[0, 1, 2], [0, 2, 3]]))
-    plate.endModel()
-    frame = robot.model.getFrameId("wrist_3_link")
-    joint = robot.model.frames[frame].parentJoint
-    placement = pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.2]))
     # Its own name: the monitor warns once per robot and geometry name, and test_collision.py
     # counts the warning of its "plate".
-    robot.collision_model.addGeometryObject(pin.GeometryObject("core_plate", joint, frame, placement, plate))
+    flat_plate(robot, "core_plate")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         monitor = CollisionMonitor(robot)
