@@ -12,7 +12,7 @@ from pinrate.errors import PlantError
 
 mujoco = pytest.importorskip("mujoco")
 
-from pinrate.plants.mujoco_model import DEFAULT_ARMATURE, build_spec, joint_layout  # noqa: E402
+from pinrate.plants.mujoco_model import DEFAULT_ARMATURE, build_spec, joint_layout, joint_space_inertia  # noqa: E402
 
 # ur5 (revolute), panda (prismatic fingers, an unaligned axis), kinova (continuous joints),
 # so101 (light links), xarm7 (URDF damping).
@@ -35,8 +35,7 @@ def test_the_tip_and_the_joint_space_inertia_are_pinocchios(name):
         # Two products of at most ~10 rigid transforms of a <= 1.5 m arm: rounding ~1e-15 m.
         assert np.allclose(data.site_xpos[site], pose[:3, 3], rtol=0, atol=1e-12)
         assert np.allclose(data.site_xmat[site].reshape(3, 3), pose[:3, :3], rtol=0, atol=1e-12)
-        inertia = np.zeros((model.nv, model.nv))
-        mujoco.mj_fullM(model, data, inertia) if hasattr(data, "M") else mujoco.mj_fullM(model, inertia, data.qM)
+        inertia = joint_space_inertia(mujoco, model, data)
         mujoco_inertia = inertia[np.ix_(layout.qvel, layout.qvel)] - np.diag(model.dof_armature[layout.qvel])
         crba = pin.crba(robot.model, pin_data, q)
         crba = np.triu(crba) + np.triu(crba, 1).T

@@ -293,12 +293,7 @@ def set_servo_gains(
     data = mujoco.MjData(mj_model)
     data.qpos[:] = layout.to_mujoco(home)
     mujoco.mj_forward(mj_model, data)
-    inertia = np.zeros((mj_model.nv, mj_model.nv))
-    try:
-        mujoco.mj_fullM(mj_model, data, inertia)
-    except TypeError:  # MuJoCo 3: (model, destination, qM)
-        mujoco.mj_fullM(mj_model, inertia, data.qM)
-    diagonal = np.diag(inertia)[layout.qvel]
+    diagonal = np.diag(joint_space_inertia(mujoco, mj_model, data))[layout.qvel]
     for actuator, integral, m_jj in zip(layout.actuator, layout.integral, diagonal, strict=True):
         if kind == "velocity":
             _set_gains(mj_model, actuator, m_jj / time_constant, 0.0, m_jj / time_constant)
@@ -308,6 +303,18 @@ def set_servo_gains(
             stiffness = m_jj / time_constant**2
             _set_gains(mj_model, actuator, stiffness, stiffness, 2.0 * m_jj / time_constant)
     return diagonal
+
+
+def joint_space_inertia(mujoco: Any, mj_model: Any, data: Any) -> np.ndarray:
+    """MuJoCo's joint space inertia M (nv, nv; kg m² or kg, armature included) at ``data``'s
+    configuration, after ``mj_forward``, whichever of MuJoCo 3's and 4's signatures of
+    ``mj_fullM`` the installed release has."""
+    inertia = np.zeros((mj_model.nv, mj_model.nv))
+    try:
+        mujoco.mj_fullM(mj_model, data, inertia)
+    except TypeError:  # MuJoCo 3: (model, destination, qM)
+        mujoco.mj_fullM(mj_model, inertia, data.qM)
+    return inertia
 
 
 def _set_gains(mj_model: Any, actuator: int, gain: float, stiffness: float, damping: float) -> None:
@@ -343,4 +350,13 @@ def joint_layout(robot: Robot, mj_model: Any) -> JointLayout:
     )
 
 
-__all__ = ["DEFAULT_ARMATURE", "GRAVITY", "MIN_MASS", "JointLayout", "build_spec", "joint_layout", "set_servo_gains"]
+__all__ = [
+    "DEFAULT_ARMATURE",
+    "GRAVITY",
+    "MIN_MASS",
+    "JointLayout",
+    "build_spec",
+    "joint_layout",
+    "joint_space_inertia",
+    "set_servo_gains",
+]
