@@ -135,9 +135,14 @@ class MujocoPlant(Plant):
         # Where q_ref lives: the activation of the velocity servo's integral, or of the position servo.
         referenced = self.layout.integral if actuator == "velocity" else self.layout.actuator
         self._reference_state = self.model.actuator_actadr[referenced]
-        speeds = np.array(robot.model.velocityLimit, dtype=float)
-        speeds = np.where(np.isfinite(speeds) & (speeds > 0), speeds, UNLIMITED_SPEED)
-        # A servo of time constant T moving at q̇ comes to rest about q̇ T past where its command stopped.
+        # The fastest each joint is commanded: its servo's command bound (the URDF's velocity
+        # limit, as the model set it). A servo of time constant T moving at q̇ comes to rest
+        # about q̇ T past where its command stopped.
+        bounded = self.model.actuator_ctrllimited[self.layout.actuator].astype(bool)
+        speeds = np.full(robot.nv, UNLIMITED_SPEED)
+        speeds[self.layout.idx_v] = np.where(
+            bounded, self.model.actuator_ctrlrange[self.layout.actuator, 1], UNLIMITED_SPEED
+        )
         self.limit_tolerance = self.time_constant * speeds + LIMIT_SOFTNESS
         self._time = 0.0
         self.reset(robot.home())
