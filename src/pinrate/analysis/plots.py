@@ -14,6 +14,7 @@ import numpy as np
 from matplotlib.colors import LinearSegmentedColormap, LogNorm
 
 from ..control.trajectory import Trajectory
+from ..errors import InputError
 from .regions import RegionMap
 from .sweeps import Sweep
 
@@ -115,7 +116,7 @@ def plant_tracking_png(trajectory: Trajectory, joint_names: tuple[str, ...], pat
     the tip's tracking error (mm) below."""
     record = trajectory.plant
     if record is None:
-        raise ValueError("the trajectory was not run on a plant: it has no measured rates")
+        raise InputError("the trajectory was not run on a plant: it has no measured rates")
     time = np.arange(trajectory.steps) * trajectory.dt
     figure, (rates, tracking) = plt.subplots(
         2, 1, figsize=(8, 6), dpi=110, sharex=True, gridspec_kw={"height_ratios": [3, 1]}
